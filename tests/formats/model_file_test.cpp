@@ -1,0 +1,521 @@
+// Writer and reader of the model file: round trip, determinism, atomic writes, and one test per
+// broken-file case, each asserting its own message (dataset + problem). Broken files are made by
+// writing a good file and then changing it with the HDF5 C API.
+#include "sinew/formats/model_file.hpp"
+
+#include <hdf5.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "sinew/common/error.hpp"
+#include "test_models.hpp"
+
+namespace sinew::formats {
+namespace {
+
+using testing::every_feature_model;
+using testing::file_bytes;
+using testing::temp_path;
+
+// ---- HDF5 surgery on written files ----
+
+class H5File {
+ public:
+  explicit H5File(const std::string& path) : id_(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT)) {
+    EXPECT_GE(id_, 0) << "cannot open " << path;
+  }
+  ~H5File() { H5Fclose(id_); }
+  hid_t id() const { return id_; }
+
+ private:
+  hid_t id_;
+};
+
+template <typename T>
+hid_t mem_type() {
+  if constexpr (std::is_same_v<T, double>) return H5T_NATIVE_DOUBLE;
+  if constexpr (std::is_same_v<T, std::int64_t>) return H5T_NATIVE_INT64;
+  return H5T_NATIVE_INT32;
+}
+
+// Reads a whole numeric dataset, lets `edit` change the flat values, writes it back.
+template <typename T, typename Edit>
+void edit_dataset(const std::string& path, const std::string& dataset, Edit edit) {
+  H5File f(path);
+  const hid_t ds = H5Dopen2(f.id(), dataset.c_str(), H5P_DEFAULT);
+  ASSERT_GE(ds, 0) << dataset;
+  const hid_t space = H5Dget_space(ds);
+  std::vector<T> values(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+  ASSERT_GE(H5Dread(ds, mem_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+  edit(values);
+  ASSERT_GE(H5Dwrite(ds, mem_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+  H5Sclose(space);
+  H5Dclose(ds);
+}
+
+template <typename T>
+void set_value(const std::string& path, const std::string& dataset, std::size_t flat_index,
+               T value) {
+  edit_dataset<T>(path, dataset, [&](std::vector<T>& v) {
+    ASSERT_LT(flat_index, v.size());
+    v[flat_index] = value;
+  });
+}
+
+void delete_dataset(const std::string& path, const std::string& dataset) {
+  H5File f(path);
+  ASSERT_GE(H5Ldelete(f.id(), dataset.c_str(), H5P_DEFAULT), 0) << dataset;
+}
+
+// Replaces a dataset by a rows × cols (cols 0: 1-D) one of the given type, filled with zeros.
+void replace_dataset(const std::string& path, const std::string& dataset, hsize_t rows,
+                     hsize_t cols, hid_t type) {
+  H5File f(path);
+  ASSERT_GE(H5Ldelete(f.id(), dataset.c_str(), H5P_DEFAULT), 0) << dataset;
+  const hsize_t dims[2] = {rows, cols};
+  const hid_t space = H5Screate_simple(cols > 0 ? 2 : 1, dims, nullptr);
+  const hid_t ds =
+      H5Dcreate2(f.id(), dataset.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  ASSERT_GE(ds, 0);
+  std::vector<double> zeros(static_cast<std::size_t>(rows * std::max<hsize_t>(cols, 1)), 0.0);
+  if (!zeros.empty()) H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, zeros.data());
+  H5Dclose(ds);
+  H5Sclose(space);
+}
+
+void set_version_attribute(const std::string& path, std::int32_t version) {
+  H5File f(path);
+  const hid_t a = H5Aopen(f.id(), "format_version", H5P_DEFAULT);
+  ASSERT_GE(a, 0);
+  ASSERT_GE(H5Awrite(a, H5T_NATIVE_INT32, &version), 0);
+  H5Aclose(a);
+}
+
+// The message of the FormatError that reading `path` throws ("" and a test failure if none).
+std::string read_error(const std::string& path) {
+  try {
+    (void)read_model(path);
+  } catch (const FormatError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "expected FormatError, got: " << e.what();
+    return e.what();
+  }
+  ADD_FAILURE() << "reading " << path << " did not fail";
+  return "";
+}
+
+#define EXPECT_CONTAINS(text, part) \
+  EXPECT_NE(std::string(text).find(part), std::string::npos) << "message: " << (text)
+
+class BrokenFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    model_ = every_feature_model();
+    path_ = temp_path("model.h5");
+    write_model(model_, path_);
+  }
+  void TearDown() override { std::filesystem::remove(path_); }
+  Model model_;
+  std::string path_;
+};
+
+// ---- round trip and determinism ----
+
+TEST(ModelFile, EveryFeatureModelIsComplete) {
+  const Model m = every_feature_model();
+  EXPECT_EQ(m.materials.size(), 2u);
+  EXPECT_EQ(m.muscles.size(), 2u);
+  EXPECT_FALSE(m.rigid_nodes.empty());
+  EXPECT_FALSE(m.sliding.empty());
+  ASSERT_EQ(m.surfaces.size(), 2u);
+  EXPECT_EQ(m.surfaces[0].role, SurfaceRole::sliding);
+  EXPECT_EQ(m.surfaces[1].role, SurfaceRole::visual);
+  EXPECT_FALSE(m.surfaces[1].embedding_element.empty());
+  EXPECT_FALSE(m.provenance.inputs.empty());
+  // Some element holds two materials, one is not full.
+  bool two = false;
+  for (std::size_t e = 0; e + 1 < m.material_offsets.size(); ++e) {
+    two = two || m.material_offsets[e + 1] - m.material_offsets[e] == 2;
+  }
+  EXPECT_TRUE(two);
+  EXPECT_DOUBLE_EQ(m.material_fractions[0], 0.5);
+}
+
+TEST(ModelFile, RoundTripKeepsEveryFeature) {
+  const Model m = every_feature_model();
+  const std::string path = temp_path("model.h5");
+  write_model(m, path);
+  const Model back = read_model(path);
+  EXPECT_TRUE(back.grid == m.grid);
+  EXPECT_EQ(back.node_lattice, m.node_lattice);
+  EXPECT_EQ(back.element_nodes, m.element_nodes);
+  EXPECT_TRUE(back.materials == m.materials);
+  EXPECT_EQ(back.material_fractions, m.material_fractions);
+  EXPECT_TRUE(back.muscles == m.muscles);
+  EXPECT_TRUE(back.sliding == m.sliding);
+  EXPECT_TRUE(back.surfaces == m.surfaces);
+  EXPECT_TRUE(back.node_sets == m.node_sets);
+  EXPECT_TRUE(back.element_sets == m.element_sets);
+  EXPECT_TRUE(back.provenance == m.provenance);
+  EXPECT_TRUE(back == m);
+  std::filesystem::remove(path);
+}
+
+TEST(ModelFile, RewriteIsByteIdentical) {
+  const Model m = every_feature_model();
+  const std::string a = temp_path("a.h5"), b = temp_path("b.h5"), c = temp_path("c.h5");
+  write_model(m, a);
+  write_model(read_model(a), b);
+  write_model(m, c);
+  const std::string bytes_a = file_bytes(a);
+  ASSERT_GT(bytes_a.size(), 1000u);
+  EXPECT_TRUE(bytes_a == file_bytes(b)) << "write, read, write again differs";
+  EXPECT_TRUE(bytes_a == file_bytes(c)) << "the same model written twice differs";
+  for (const auto& p : {a, b, c}) std::filesystem::remove(p);
+}
+
+TEST(ModelFile, NamedSetsKeepTheirOrder) {
+  Model m = every_feature_model();
+  // Not in name order: the file keeps the model's order.
+  std::swap(m.node_sets.front(), m.node_sets.back());
+  const std::string path = temp_path("model.h5");
+  write_model(m, path);
+  EXPECT_TRUE(read_model(path).node_sets == m.node_sets);
+  std::filesystem::remove(path);
+}
+
+TEST(ModelFile, WriteLeavesNoTemporaryAndReplacesAnOldFile) {
+  const std::string path = temp_path("model.h5");
+  {
+    std::ofstream old(path);
+    old << "old contents";
+  }
+  write_model(every_feature_model(), path);
+  EXPECT_NO_THROW((void)read_model(path));
+  const auto dir = std::filesystem::path(path).parent_path();
+  const std::string tmp_name = std::filesystem::path(path).filename().string() + ".tmp-";
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    EXPECT_NE(entry.path().filename().string().rfind(tmp_name, 0), 0u) << entry.path();
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(ModelFile, InvalidModelIsNotWritten) {
+  Model m = every_feature_model();
+  m.muscles[0].fibres[0] = {0.5, 0, 0};
+  const std::string path = temp_path("model.h5");
+  try {
+    write_model(m, path);
+    FAIL() << "an invalid model was written";
+  } catch (const FormatError& e) {
+    EXPECT_EQ(e.field(), "/muscles/fibres");
+    EXPECT_CONTAINS(e.what(), "not a unit vector");
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp-" + std::to_string(getpid())));
+}
+
+TEST(ModelFile, UnwritableDirectoryIsAnIoError) {
+  EXPECT_THROW(write_model(every_feature_model(), "/nonexistent-dir-sinew/model.h5"), IoError);
+  EXPECT_FALSE(
+      std::filesystem::exists("/nonexistent-dir-sinew/model.h5.tmp-" + std::to_string(getpid())));
+}
+
+TEST(ModelFile, MissingFileIsAnIoError) {
+  try {
+    (void)read_model("/nonexistent-dir-sinew/model.h5");
+    FAIL();
+  } catch (const IoError& e) {
+    EXPECT_CONTAINS(e.what(), "/nonexistent-dir-sinew/model.h5: cannot open");
+  }
+}
+
+// ---- broken files: one message each ----
+
+TEST_F(BrokenFile, TruncatedFile) {
+  const std::string bytes = file_bytes(path_);
+  {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
+  }
+  const std::string msg = read_error(path_);
+  EXPECT_CONTAINS(msg, path_ + ": ");
+  EXPECT_CONTAINS(msg, "truncated or corrupt");
+}
+
+TEST_F(BrokenFile, TruncatedAnywhereNeverCrashes) {
+  // Cut the file at 40 lengths spread over its size: every one is a FormatError, none a crash.
+  const std::string bytes = file_bytes(path_);
+  const std::string cut = temp_path("cut.h5");
+  for (std::size_t i = 0; i < 40; ++i) {
+    const std::size_t n = bytes.size() * i / 40 + i;
+    {
+      std::ofstream out(cut, std::ios::binary | std::ios::trunc);
+      out.write(bytes.data(), static_cast<std::streamsize>(n));
+    }
+    EXPECT_THROW((void)read_model(cut), FormatError) << "cut at " << n << " of " << bytes.size();
+  }
+  std::filesystem::remove(cut);
+}
+
+TEST_F(BrokenFile, EmptyFile) {
+  { std::ofstream out(path_, std::ios::binary | std::ios::trunc); }
+  EXPECT_CONTAINS(read_error(path_), "not an HDF5 file");
+}
+
+TEST_F(BrokenFile, NotHdf5) {
+  {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out << "solid cube\nendsolid cube\n";
+  }
+  EXPECT_CONTAINS(read_error(path_), "not an HDF5 file");
+}
+
+TEST_F(BrokenFile, WrongVersion) {
+  set_version_attribute(path_, 2);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/format_version: unsupported format version 2 (this build reads version 1)");
+}
+
+TEST_F(BrokenFile, NotASinewModel) {
+  {
+    H5File f(path_);
+    ASSERT_GE(H5Adelete(f.id(), "format"), 0);
+  }
+  EXPECT_CONTAINS(read_error(path_), "/format: missing root attribute");
+}
+
+TEST_F(BrokenFile, MissingDataset) {
+  delete_dataset(path_, "/materials/density");
+  EXPECT_CONTAINS(read_error(path_), "/materials/density: missing dataset");
+}
+
+TEST_F(BrokenFile, MissingGroup) {
+  delete_dataset(path_, "/constraints");
+  EXPECT_CONTAINS(read_error(path_), "/constraints/rigid_nodes: missing dataset");
+}
+
+TEST_F(BrokenFile, WrongShape) {
+  replace_dataset(path_, "/elements/nodes", model_.element_count(), 7, H5T_STD_I32LE);
+  EXPECT_CONTAINS(read_error(path_), "/elements/nodes: wrong shape (36, 7), expected (n, 8)");
+}
+
+TEST_F(BrokenFile, WrongRowCount) {
+  replace_dataset(path_, "/materials/density", 3, 0, H5T_IEEE_F64LE);
+  EXPECT_CONTAINS(read_error(path_), "/materials/density: wrong shape (3), expected (2)");
+}
+
+TEST_F(BrokenFile, WrongDtype) {
+  replace_dataset(path_, "/nodes/lattice", model_.node_count(), 3, H5T_IEEE_F64LE);
+  EXPECT_CONTAINS(read_error(path_), "/nodes/lattice: wrong dtype, expected int32");
+}
+
+TEST_F(BrokenFile, OutOfRangeNodeIndex) {
+  set_value<std::int32_t>(path_, "/elements/nodes", 3 * 8 + 2, 99999);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/elements/nodes[3]: node id 99999 (corner 2) out of range [0, 80)");
+}
+
+TEST_F(BrokenFile, OutOfRangeMaterialIndex) {
+  set_value<std::int32_t>(path_, "/element_materials/material", 4, 7);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/element_materials/material[4]: element 4: material id 7 out of range [0, 2)");
+}
+
+TEST_F(BrokenFile, OutOfRangeSurfaceIndex) {
+  set_value<std::int32_t>(path_, "/constraints/sliding_surface", 1, 5);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/constraints/sliding_surface[1]: surface id 5 out of range [0, 2)");
+}
+
+TEST_F(BrokenFile, OutOfRangeTriangleIndex) {
+  set_value<std::int32_t>(path_, "/constraints/sliding_rest_triangle", 0, 2);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/constraints/sliding_rest_triangle[0]: triangle id 2 out of range [0, 2) of "
+                  "surface 'skull'");
+}
+
+TEST_F(BrokenFile, OutOfRangeElementIndex) {
+  set_value<std::int32_t>(path_, "/muscles/elements", 13, 36);
+  EXPECT_CONTAINS(
+      read_error(path_),
+      "/muscles/elements[13]: muscle 'frontalis_right': element id 36 out of range [0, 36)");
+}
+
+TEST_F(BrokenFile, OutOfRangeSurfaceVertex) {
+  set_value<std::int32_t>(path_, "/surfaces/triangles", 2 * 3 + 1, 20);  // skin triangle 0
+  EXPECT_CONTAINS(read_error(path_),
+                  "/surfaces/triangles[2]: surface 'skin': vertex id 20 out of range [0, 20)");
+}
+
+TEST_F(BrokenFile, OutOfRangeEmbeddingElement) {
+  set_value<std::int32_t>(path_, "/surfaces/embedding_element", 3, -1);
+  EXPECT_CONTAINS(
+      read_error(path_),
+      "/surfaces/embedding_element[3]: surface 'skin': vertex 3: element id -1 out of range");
+}
+
+TEST_F(BrokenFile, NaNVertex) {
+  set_value<double>(path_, "/surfaces/vertices", 3 * 1 + 2,
+                    std::numeric_limits<double>::quiet_NaN());
+  EXPECT_CONTAINS(read_error(path_),
+                  "/surfaces/vertices[1]: surface 'skull': vertex is not finite");
+}
+
+TEST_F(BrokenFile, NaNModulus) {
+  set_value<double>(path_, "/materials/youngs_modulus", 1,
+                    std::numeric_limits<double>::quiet_NaN());
+  EXPECT_CONTAINS(read_error(path_),
+                  "/materials/youngs_modulus[1]: material 'muscle_tissue': Young's modulus must be "
+                  "positive and finite, got nan");
+}
+
+TEST_F(BrokenFile, NaNFraction) {
+  set_value<double>(path_, "/element_materials/fraction", 2,
+                    std::numeric_limits<double>::quiet_NaN());
+  EXPECT_CONTAINS(read_error(path_),
+                  "/element_materials/fraction[2]: element 2: fraction is not finite");
+}
+
+TEST_F(BrokenFile, NegativeFraction) {
+  set_value<double>(path_, "/element_materials/fraction", 5, -0.1);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/element_materials/fraction[5]: element 5: fraction -0.1 outside [0, 1]");
+}
+
+TEST_F(BrokenFile, NegativeMuscleFraction) {
+  set_value<double>(path_, "/muscles/fractions", 0, -0.25);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/muscles/fractions[0]: muscle 'frontalis_left': fraction -0.25 outside [0, 1]");
+}
+
+TEST_F(BrokenFile, FractionSumAboveOne) {
+  // Elements of the k = 1 row hold both layers (0.5 + 0.5); make them 0.5 + 0.7.
+  const std::size_t e = 12;  // first element of k = 1
+  const auto first = static_cast<std::size_t>(model_.material_offsets[e]);
+  ASSERT_EQ(model_.material_offsets[e + 1] - model_.material_offsets[e], 2);
+  set_value<double>(path_, "/element_materials/fraction", first + 1, 0.7);
+  EXPECT_CONTAINS(read_error(path_), "/element_materials/fraction[" + std::to_string(first) +
+                                         "]: element 12: fraction sum 1.2 exceeds 1");
+}
+
+TEST_F(BrokenFile, ElementWithoutMaterial) {
+  // Element 0 holds one entry (fat, 0.5): make it zero.
+  set_value<double>(path_, "/element_materials/fraction", 0, 0.0);
+  EXPECT_CONTAINS(read_error(path_), "/element_materials/offsets[0]: element 0 has no material");
+}
+
+TEST_F(BrokenFile, NonMonotoneOffsets) {
+  set_value<std::int64_t>(path_, "/element_materials/offsets", 3, 100);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/element_materials/offsets[4]: offsets decrease: 4 after 100");
+}
+
+TEST_F(BrokenFile, NonUnitFibre) {
+  set_value<double>(path_, "/muscles/fibres", 2, 2.0);  // fibre 0 = (0, 0, 2)
+  EXPECT_CONTAINS(read_error(path_),
+                  "/muscles/fibres[0]: muscle 'frontalis_left': fibre direction is not a unit "
+                  "vector (length 2)");
+}
+
+TEST_F(BrokenFile, EmbeddingOutsideElement) {
+  set_value<double>(path_, "/surfaces/embedding_local", 4 * 3 + 0, 1.5);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/surfaces/embedding_local[4]: surface 'skin': vertex 4: local coordinates (1.5, "
+                  "-1, 1) outside the element");
+}
+
+TEST_F(BrokenFile, InconsistentModuli) {
+  set_value<double>(path_, "/materials/shear_modulus", 0, 1000.0);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/materials/shear_modulus[0]: material 'fat': shear modulus 1000 inconsistent "
+                  "with E/(2(1+nu))");
+}
+
+TEST_F(BrokenFile, PoissonRatioAtIncompressibleLimit) {
+  set_value<double>(path_, "/materials/poisson_ratio", 0, 0.5);
+  EXPECT_CONTAINS(
+      read_error(path_),
+      "/materials/poisson_ratio[0]: material 'fat': Poisson ratio 0.5 outside (-1, 0.5)");
+}
+
+TEST_F(BrokenFile, UnsortedNodeLattice) {
+  set_value<std::int32_t>(path_, "/nodes/lattice", 3 * 1 + 0, 0);  // node 1 becomes (0, 0, 0)
+  EXPECT_CONTAINS(read_error(path_), "/nodes/lattice[1]: nodes not sorted by (k, j, i) and unique");
+}
+
+TEST_F(BrokenFile, ElementNodesInconsistentWithLattice) {
+  // Swap corners 0 and 1 of element 0: ids in range, lattice wrong.
+  edit_dataset<std::int32_t>(path_, "/elements/nodes",
+                             [](std::vector<std::int32_t>& v) { std::swap(v[0], v[1]); });
+  EXPECT_CONTAINS(read_error(path_),
+                  "/elements/nodes[0]: corner 0 is node 1 at lattice (1, 0, 0), but base (0, 0, 0) "
+                  "+ corner offset gives (0, 0, 0)");
+}
+
+TEST_F(BrokenFile, SlidingOnVisualSurface) {
+  set_value<std::int32_t>(path_, "/constraints/sliding_surface", 0, 1);
+  EXPECT_CONTAINS(
+      read_error(path_),
+      "/constraints/sliding_surface[0]: surface 1 ('skin') has role visual, expected sliding");
+}
+
+TEST_F(BrokenFile, UnsortedNamedSet) {
+  edit_dataset<std::int32_t>(path_, "/element_sets/corner",
+                             [](std::vector<std::int32_t>& v) { std::swap(v[1], v[2]); });
+  EXPECT_CONTAINS(read_error(path_),
+                  "/element_sets/corner[2]: element ids not sorted and unique: 5 follows 35");
+}
+
+TEST_F(BrokenFile, NamedSetOutOfRange) {
+  set_value<std::int32_t>(path_, "/node_sets/x_max", 0, 80);
+  EXPECT_CONTAINS(read_error(path_), "/node_sets/x_max[0]: node id 80 out of range [0, 80)");
+}
+
+TEST_F(BrokenFile, FixedLengthStringsAreReadToo) {
+  // Other tools may write fixed-length strings; they read back the same.
+  {
+    H5File f(path_);
+    ASSERT_GE(H5Ldelete(f.id(), "/materials/name", H5P_DEFAULT), 0);
+    const hid_t t = H5Tcopy(H5T_C_S1);
+    H5Tset_size(t, 16);
+    const hsize_t n = 2;
+    const hid_t space = H5Screate_simple(1, &n, nullptr);
+    const hid_t ds =
+        H5Dcreate2(f.id(), "/materials/name", t, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    char names[2][16] = {"fat", "muscle_tissue"};
+    ASSERT_GE(H5Dwrite(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names), 0);
+    H5Dclose(ds);
+    H5Sclose(space);
+    H5Tclose(t);
+  }
+  EXPECT_TRUE(read_model(path_) == model_);
+}
+
+TEST_F(BrokenFile, UnknownSurfaceRole) {
+  {
+    H5File f(path_);
+    ASSERT_GE(H5Ldelete(f.id(), "/surfaces/role", H5P_DEFAULT), 0);
+    const hid_t t = H5Tcopy(H5T_C_S1);
+    H5Tset_size(t, H5T_VARIABLE);
+    const hsize_t n = 2;
+    const hid_t space = H5Screate_simple(1, &n, nullptr);
+    const hid_t ds =
+        H5Dcreate2(f.id(), "/surfaces/role", t, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    const char* roles[2] = {"sliding", "decorative"};
+    ASSERT_GE(H5Dwrite(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, roles), 0);
+    H5Dclose(ds);
+    H5Sclose(space);
+    H5Tclose(t);
+  }
+  EXPECT_CONTAINS(read_error(path_),
+                  "/surfaces/role[1]: unknown surface role 'decorative' (known: sliding, visual)");
+}
+
+}  // namespace
+}  // namespace sinew::formats
