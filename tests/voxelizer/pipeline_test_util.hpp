@@ -1,0 +1,69 @@
+#pragma once
+// Helpers for the voxelizer pipeline tests: temporary folders, OBJ writing, spec running.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "sinew/voxelizer/mesh.hpp"
+#include "sinew/voxelizer/spec.hpp"
+#include "sinew/voxelizer/voxelize.hpp"
+
+namespace sinew::voxelizer::testing {
+
+// A fresh folder under the system temp dir, removed when the object dies.
+class TempDir {
+ public:
+  TempDir() {
+    static std::atomic<int> counter{0};
+    path_ = std::filesystem::temp_directory_path() /
+            ("sinew-voxpipe-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+  std::filesystem::path write(const std::string& name, const std::string& text) const {
+    std::ofstream out(path_ / name);
+    out << text;
+    return path_ / name;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Writes mesh (coordinates as they are) as a Wavefront OBJ.
+inline void write_obj(const TriangleMesh& mesh, const std::filesystem::path& path) {
+  std::ofstream out(path);
+  out.precision(17);
+  for (const auto& v : mesh.vertices) out << "v " << v.x << ' ' << v.y << ' ' << v.z << '\n';
+  for (const auto& t : mesh.triangles) {
+    out << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+  }
+}
+
+inline VoxelizeResult run_spec(const std::string& yaml, const std::filesystem::path& file,
+                               int threads = 0) {
+  VoxelizeOptions options;
+  options.threads = threads;
+  return voxelize(parse_spec(yaml, file), options);
+}
+
+inline double material_volume(const Summary& s, const std::string& name) {
+  for (const auto& v : s.material_volumes)
+    if (v.name == name) return v.volume;
+  return -1;
+}
+
+inline std::filesystem::path shared_mesh_dir() {
+  return SINEW_SHARED_MESH_DIR;
+}
+
+}  // namespace sinew::voxelizer::testing

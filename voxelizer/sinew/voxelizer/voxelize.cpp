@@ -1,0 +1,830 @@
+#include "sinew/voxelizer/voxelize.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "sinew/common/error.hpp"
+#include "sinew/common/log.hpp"
+#include "sinew/common/progress.hpp"
+#include "sinew/common/version.hpp"
+#include "sinew/formats/model_file.hpp"
+#include "sinew/formats/sha256.hpp"
+#include "sinew/voxelizer/constraints.hpp"
+#include "sinew/voxelizer/embedding.hpp"
+#include "sinew/voxelizer/fibres.hpp"
+#include "sinew/voxelizer/fractions.hpp"
+#include "sinew/voxelizer/offset.hpp"
+#include "sinew/voxelizer/primitives.hpp"
+
+namespace sinew::voxelizer {
+
+double available_memory_bytes() {
+  std::ifstream in("/proc/meminfo");
+  std::string key;
+  double value = 0;
+  std::string unit;
+  while (in >> key >> value >> unit) {
+    if (key == "MemAvailable:") return value * 1024.0;
+  }
+  return 0;
+}
+
+double peak_rss_bytes() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) {
+      std::istringstream is(line.substr(6));
+      double kb = 0;
+      is >> kb;
+      return kb * 1024.0;
+    }
+  }
+  return 0;
+}
+
+TriangleMesh load_mesh_source(const MeshSource& s) {
+  if (s.kind == MeshSource::Kind::file) return load_mesh(s.path, s.transform);
+  TriangleMesh m;
+  switch (s.kind) {
+    case MeshSource::Kind::sphere:
+      m = make_sphere(s.centre, s.radii.x, s.subdivisions);
+      break;
+    case MeshSource::Kind::ellipsoid:
+      m = make_ellipsoid(s.centre, s.radii, s.subdivisions);
+      break;
+    case MeshSource::Kind::box:
+      m = make_box(s.box_lo, s.box_hi, s.subdivisions);
+      break;
+    case MeshSource::Kind::cylinder:
+      m = make_cylinder(s.centre, s.radii.x, s.radii.y, s.subdivisions);
+      break;
+    case MeshSource::Kind::file:
+      break;
+  }
+  apply_transform(s.transform, m);
+  m.source = s.describe();
+  return m;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+class StageTimer {
+ public:
+  explicit StageTimer(Summary& s) : s_(s), start_(Clock::now()), cpu_(process_cpu_seconds()) {}
+  void end(const std::string& name) {
+    const auto now = Clock::now();
+    const double cpu = process_cpu_seconds();
+    s_.stages.push_back(
+        {name, std::chrono::duration<double>(now - start_).count(), cpu - cpu_, peak_rss_bytes()});
+    log::debug("stage {}: {:.3f} s", name, s_.stages.back().seconds);
+    start_ = now;
+    cpu_ = cpu;
+  }
+
+ private:
+  Summary& s_;
+  Clock::time_point start_;
+  double cpu_;
+};
+
+struct LoadedMesh {
+  TriangleMesh mesh;
+  MeshDiagnostics diagnostics;
+  std::unique_ptr<SignedField> field;
+};
+
+formats::Point to_point(const Vec3d& v) {
+  return {v.x, v.y, v.z};
+}
+
+std::string format_bytes(double b) {
+  char buf[64];
+  if (b >= 1024.0 * 1024 * 1024) {
+    std::snprintf(buf, sizeof buf, "%.2f GiB", b / (1024.0 * 1024 * 1024));
+  } else {
+    std::snprintf(buf, sizeof buf, "%.1f MiB", b / (1024.0 * 1024));
+  }
+  return buf;
+}
+
+class Pipeline {
+ public:
+  Pipeline(const Spec& spec, const VoxelizeOptions& options) : spec_(spec), options_(options) {}
+
+  VoxelizeResult run() {
+    StageTimer timer(result_.summary);
+    auto& summary = result_.summary;
+    summary.threads = omp_get_max_threads();
+    summary.output = spec_.output.string();
+
+    load_all();
+    timer.end("load");
+    choose_resolution();
+    index_all();
+    timer.end("index");
+    check_inner_inside_outer();
+    timer.end("checks");
+    estimate_memory();
+    timer.end("estimate");
+    compute();
+    timer.end("fractions");
+    build_model();
+    timer.end("model");
+    fibres();
+    timer.end("fibres");
+    constraints();
+    timer.end("constraints");
+    surfaces();
+    timer.end("embedding");
+    provenance();
+    return std::move(result_);
+  }
+
+ private:
+  const Spec& spec_;
+  const VoxelizeOptions& options_;
+  VoxelizeResult result_;
+  double h_ = 0;
+
+  LoadedMesh outer_;
+  std::optional<LoadedMesh> inner_;
+  std::vector<LoadedMesh> muscles_, tendons_;
+  std::vector<std::optional<LoadedMesh>> regions_;
+  std::map<std::string, LoadedMesh> extra_;  // meshes referenced by field path
+  std::vector<std::string> input_files_;
+
+  FractionProblem problem_;
+  VoxelFractions fractions_;
+  std::vector<int> label_material_;  // label -> index into model.materials (-1 for 0)
+  std::vector<int> label_muscle_;    // label -> index into spec.muscles or -1
+  std::vector<std::string> used_materials_;
+
+  void warn(const std::string& w) {
+    log::warn("{}", w);
+    result_.summary.warnings.push_back(w);
+  }
+
+  LoadedMesh load(const MeshSource& src, const std::string& role) {
+    LoadedMesh lm;
+    lm.mesh = load_mesh_source(src);
+    if (src.kind == MeshSource::Kind::file) input_files_.push_back(src.path.string());
+    for (std::size_t v = 0; v < lm.mesh.vertices.size(); ++v) {
+      const auto& p = lm.mesh.vertices[v];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        throw GeometryError(src.describe(), src.field,
+                            "vertex coordinates are not finite (NaN or "
+                            "infinite)")
+            .at(static_cast<std::int64_t>(v));
+      }
+    }
+    if (lm.mesh.triangles.empty())
+      throw GeometryError(src.describe(), src.field, "the mesh is empty");
+    lm.diagnostics = clean_mesh(lm.mesh, spec_.weld_tolerance);
+    if (lm.mesh.triangles.empty()) {
+      throw GeometryError(src.describe(), src.field,
+                          "the mesh has no triangles left after removing degenerate ones");
+    }
+    if (lm.diagnostics.closed && lm.diagnostics.inconsistently_oriented_edges == 0 &&
+        lm.diagnostics.enclosed_volume < 0) {
+      // A closed mesh oriented inward: the winding number would be -1 inside it.
+      for (auto& t : lm.mesh.triangles) std::swap(t[1], t[2]);
+      lm.diagnostics.enclosed_volume = -lm.diagnostics.enclosed_volume;
+      warn(role + " (" + src.describe() + "): oriented inward; triangles flipped");
+    }
+    result_.summary.meshes.push_back({role, src.describe(), lm.diagnostics});
+    const auto& d = lm.diagnostics;
+    if (!d.closed) {
+      warn(role + " (" + src.describe() + "): not closed (" + std::to_string(d.boundary_edges) +
+           " boundary edges, " + std::to_string(d.non_manifold_edges) +
+           " non-manifold edges); inside/outside from the winding number");
+    }
+    if (d.inconsistently_oriented_edges > 0) {
+      warn(role + ": " + std::to_string(d.inconsistently_oriented_edges) +
+           " inconsistently oriented edges");
+    }
+    return lm;
+  }
+
+  void load_all() {
+    outer_ = load(spec_.outer, "outer");
+    if (spec_.inner) inner_ = load(*spec_.inner, "inner");
+    for (std::size_t i = 0; i < spec_.muscles.size(); ++i) {
+      muscles_.push_back(load(spec_.muscles[i].mesh,
+                              "muscles[" + std::to_string(i) + "] " + spec_.muscles[i].name));
+    }
+    for (std::size_t i = 0; i < spec_.tendons.size(); ++i) {
+      tendons_.push_back(load(*spec_.tendons[i].mesh,
+                              "tendons[" + std::to_string(i) + "] " + spec_.tendons[i].name));
+    }
+    for (std::size_t i = 0; i < spec_.regions.size(); ++i) {
+      if (spec_.regions[i].mesh) {
+        regions_.push_back(load(*spec_.regions[i].mesh,
+                                "regions[" + std::to_string(i) + "] " + spec_.regions[i].name));
+      } else {
+        regions_.emplace_back();
+      }
+    }
+    auto extra = [&](const SurfaceRef& r) {
+      if (r.mesh && !extra_.count(r.field)) extra_.emplace(r.field, load(*r.mesh, r.field));
+    };
+    for (const auto& m : spec_.muscles) {
+      if (m.fibres.origin.surface) extra(*m.fibres.origin.surface);
+      if (m.fibres.insertion.surface) extra(*m.fibres.insertion.surface);
+    }
+    for (const auto& b : spec_.boundary)
+      if (b.has_surface) extra(b.surface);
+    for (const auto& s : spec_.node_sets)
+      if (s.select.surface) extra(*s.select.surface);
+    for (const auto& v : spec_.visual) extra(v.surface);
+  }
+
+  double volume_of(const LoadedMesh& m) const { return std::abs(m.diagnostics.enclosed_volume); }
+
+  void choose_resolution() {
+    auto& s = result_.summary;
+    if (spec_.voxel_size) {
+      h_ = *spec_.voxel_size;
+    } else {
+      double v = volume_of(outer_);
+      if (inner_) v -= volume_of(*inner_);
+      if (spec_.tissue_thickness) {
+        v = std::min(v, outer_.diagnostics.area * *spec_.tissue_thickness);
+      }
+      if (!(v > 0)) {
+        throw GeometryError(
+            spec_.file.string(), "resolution.target_elements",
+            "cannot derive a voxel size: the tissue volume estimate is not positive "
+            "(give voxel_size instead)");
+      }
+      h_ = std::cbrt(v / static_cast<double>(*spec_.target_elements));
+    }
+    s.voxel_size = h_;
+  }
+
+  void make_field(LoadedMesh& m) {
+    const auto& d = m.diagnostics;
+    const bool watertight = d.closed && d.non_manifold_edges == 0 &&
+                            d.inconsistently_oriented_edges == 0 && d.enclosed_volume > 0;
+    m.field = std::make_unique<SignedField>(m.mesh, watertight, d.boundary_edges == 0);
+  }
+
+  void index_all() {
+    make_field(outer_);
+    if (spec_.tissue_thickness) {
+      // The inner surface the artist did not model: an inward offset of the skin.
+      const double t = *spec_.tissue_thickness;
+      LoadedMesh lm;
+      // Offset grid: the model's voxel size (the surface is then as accurate as the voxels that
+      // resolve it), finer for thin tissue.
+      lm.mesh = inward_offset_surface(outer_.mesh, t, std::min(h_, t / 3));
+      lm.mesh.source = "offset of outer by " + std::to_string(t) + " m";
+      lm.diagnostics = clean_mesh(lm.mesh, 0.0);
+      result_.summary.meshes.push_back({"inner (derived)", lm.mesh.source, lm.diagnostics});
+      inner_ = std::move(lm);
+    }
+    if (inner_) make_field(*inner_);
+    for (auto& m : muscles_) make_field(m);
+    for (auto& m : tendons_) make_field(m);
+    for (auto& m : regions_)
+      if (m) make_field(*m);
+    for (auto& [k, m] : extra_) make_field(m);
+  }
+
+  const SignedField* named_surface(const SurfaceRef& ref) {
+    if (ref.mesh) return extra_.at(ref.field).field.get();
+    if (ref.name == "outer") return outer_.field.get();
+    if (ref.name == "inner") return inner_ ? inner_->field.get() : nullptr;
+    for (std::size_t i = 0; i < spec_.muscles.size(); ++i)
+      if (spec_.muscles[i].name == ref.name) return muscles_[i].field.get();
+    for (std::size_t i = 0; i < spec_.tendons.size(); ++i)
+      if (spec_.tendons[i].name == ref.name) return tendons_[i].field.get();
+    for (std::size_t i = 0; i < spec_.regions.size(); ++i)
+      if (spec_.regions[i].name == ref.name && regions_[i]) return regions_[i]->field.get();
+    throw ConfigError(spec_.file.string(), ref.field, "unknown surface '" + ref.name + "'");
+  }
+
+  const TriangleMesh& named_mesh(const SurfaceRef& ref) {
+    if (ref.mesh) return extra_.at(ref.field).mesh;
+    if (ref.name == "outer") return outer_.mesh;
+    if (ref.name == "inner") return inner_->mesh;
+    return named_surface(ref)->mesh();
+  }
+
+  void check_inner_inside_outer() {
+    if (!inner_ || spec_.tissue_thickness) return;
+    std::vector<double> w;
+    outer_.field->winding().evaluate(inner_->mesh.vertices, w);
+    std::int64_t outside = 0;
+    for (double x : w) outside += x < 0.5 ? 1 : 0;
+    const double frac = static_cast<double>(outside) / static_cast<double>(w.size());
+    if (frac > 0.1) {
+      throw GeometryError(spec_.inner->describe(), "inner",
+                          "the inner surface (skull) is not inside the outer surface (skin): " +
+                              std::to_string(outside) + " of " + std::to_string(w.size()) +
+                              " vertices lie outside it");
+    }
+    if (outside > 0) {
+      warn("inner: " + std::to_string(outside) + " of " + std::to_string(w.size()) +
+           " vertices lie outside the outer surface");
+    }
+  }
+
+  std::array<std::int32_t, 3> dims_;
+  Vec3d origin_;
+
+  void estimate_memory() {
+    auto& s = result_.summary;
+    const auto& b = outer_.field->bounds();
+    double nvox = 1;
+    for (int d = 0; d < 3; ++d) {
+      const double n = std::ceil((b.hi[d] - b.lo[d]) / h_) + 1;
+      nvox *= n;
+      if (n > 2e9) {
+        throw ResourceError(spec_.file.string(), "resolution",
+                            "voxel size " + std::to_string(h_) + " m gives " + std::to_string(n) +
+                                " voxels along one axis (limit 2e9)");
+      }
+      dims_[static_cast<std::size_t>(d)] = static_cast<std::int32_t>(n);
+      origin_[d] = 0.5 * (b.lo[d] + b.hi[d]) - 0.5 * n * h_;
+    }
+    // Elements: the tissue volume plus a shell of boundary voxels, at most the whole grid.
+    double tissue = std::max(volume_of(outer_), 0.0);
+    const double shell = 2.0 * outer_.diagnostics.area / (h_ * h_);
+    double elements = std::min(nvox, tissue / (h_ * h_ * h_) + shell);
+    if (!std::isfinite(elements)) elements = nvox;
+    std::int64_t triangles = 0;
+    for (const auto& m : s.meshes) triangles += m.diagnostics.triangles;
+    // Bytes: ~400 per element (lattice, nodes, CSR fractions, topology sort buffers, results),
+    // ~600 per triangle (mesh copies, CGAL tree, winding-number tree), 64 MiB base.
+    const double estimate =
+        400.0 * elements + 600.0 * static_cast<double>(triangles) + 64.0 * 1024 * 1024;
+    const double available =
+        options_.memory_limit_bytes ? *options_.memory_limit_bytes : available_memory_bytes();
+    s.memory_estimate_bytes = estimate;
+    s.memory_available_bytes = available;
+    if (available > 0 && estimate > available) {
+      throw ResourceError(spec_.file.string(), "resolution",
+                          "memory estimate " + format_bytes(estimate) + " (about " +
+                              std::to_string(static_cast<long long>(elements)) +
+                              " elements at voxel size " + std::to_string(h_) +
+                              " m) exceeds the available memory " + format_bytes(available) +
+                              "; choose a larger voxel size or fewer target elements");
+    }
+    s.dims = dims_;
+  }
+
+  int material_index(const std::string& name) {
+    const auto it = std::find(used_materials_.begin(), used_materials_.end(), name);
+    return static_cast<int>(it - used_materials_.begin());
+  }
+
+  void compute() {
+    // Materials actually used, in the table's order.
+    std::vector<std::string> wanted;
+    for (const auto& l : spec_.layers) wanted.push_back(l.material);
+    for (const auto& m : spec_.muscles) wanted.push_back(m.material);
+    for (const auto& t : spec_.tendons) wanted.push_back(t.material);
+    for (const auto& r : spec_.regions) wanted.push_back(r.material);
+    for (const auto& m : spec_.materials) {
+      if (std::find(wanted.begin(), wanted.end(), m.name) != wanted.end()) {
+        used_materials_.push_back(m.name);
+      }
+    }
+
+    auto& p = problem_;
+    p.outer = outer_.field.get();
+    p.inner = inner_ ? inner_->field.get() : nullptr;
+    p.layer_count = static_cast<int>(spec_.layers.size());
+    double depth = 0;
+    label_material_ = {-1};
+    label_muscle_ = {-1};
+    for (std::size_t i = 0; i < spec_.layers.size(); ++i) {
+      if (spec_.layers[i].thickness) {
+        depth += *spec_.layers[i].thickness;
+        p.layer_bottoms.push_back(depth);
+      }
+      label_material_.push_back(material_index(spec_.layers[i].material));
+      label_muscle_.push_back(-1);
+    }
+    int label = p.layer_count + 1;
+    for (std::size_t i = 0; i < spec_.regions.size(); ++i) {
+      FractionProblem::Body b;
+      if (regions_[i]) b.field = regions_[i]->field.get();
+      b.box = spec_.regions[i].box;
+      b.label = label++;
+      p.bodies.push_back(b);
+      label_material_.push_back(material_index(spec_.regions[i].material));
+      label_muscle_.push_back(-1);
+    }
+    for (std::size_t i = 0; i < spec_.muscles.size(); ++i) {
+      p.bodies.push_back({muscles_[i].field.get(), std::nullopt, label++});
+      label_material_.push_back(material_index(spec_.muscles[i].material));
+      label_muscle_.push_back(static_cast<int>(i));
+    }
+    for (std::size_t i = 0; i < spec_.tendons.size(); ++i) {
+      p.bodies.push_back({tendons_[i].field.get(), std::nullopt, label++});
+      label_material_.push_back(material_index(spec_.tendons[i].material));
+      label_muscle_.push_back(-1);
+    }
+    p.label_count = label;
+    p.grid.voxel_size = h_;
+    p.grid.dims = dims_;
+    p.grid.origin = to_point(origin_);
+    p.max_subdivision = spec_.max_subdivision;
+    p.min_tissue_fraction = spec_.min_fraction;
+
+    ProgressOptions po;
+    po.quiet = !options_.progress;
+    po.unit = "blocks";
+    std::int64_t blocks = 1;
+    for (int d = 0; d < 3; ++d) blocks *= (dims_[static_cast<std::size_t>(d)] + 7) / 8;
+    ProgressReporter bar("fractions", blocks, po);
+    fractions_ = compute_fractions(p, [&](std::int64_t done, std::int64_t) { bar.update(done); });
+    bar.finish();
+    result_.summary.field_evaluations = fractions_.field_evaluations;
+    if (fractions_.voxels.empty()) {
+      throw GeometryError(spec_.outer.describe(), "outer",
+                          "no tissue at this resolution (voxel size " + std::to_string(h_) +
+                              " m): nothing lies inside the outer surface and outside the inner "
+                              "one");
+    }
+  }
+
+  void build_model() {
+    auto& m = result_.model;
+    auto& s = result_.summary;
+    m.grid = problem_.grid;
+    m.element_lattice = fractions_.voxels;
+    formats::build_lattice_topology(m);
+    for (const auto& name : used_materials_) {
+      const MaterialSpec* ms = spec_.find_material(name);
+      formats::Material mat;
+      mat.name = ms->name;
+      mat.youngs_modulus = ms->youngs_modulus;
+      mat.poisson_ratio = ms->poisson_ratio;
+      mat.shear_modulus = ms->youngs_modulus / (2 * (1 + ms->poisson_ratio));
+      mat.bulk_modulus = ms->youngs_modulus / (3 * (1 - 2 * ms->poisson_ratio));
+      mat.density = ms->density;
+      m.materials.push_back(mat);
+    }
+    const std::size_t ne = fractions_.voxels.size();
+    const std::size_t nmat = m.materials.size();
+    m.muscles.resize(spec_.muscles.size());
+    for (std::size_t i = 0; i < spec_.muscles.size(); ++i) {
+      const auto& ms = spec_.muscles[i];
+      auto& mu = m.muscles[i];
+      mu.name = ms.name;
+      mu.material = material_index(ms.material);
+      mu.reference_stress = ms.reference_stress;
+      mu.optimal_stretch = ms.optimal_stretch;
+      mu.passive_p1 = ms.passive_p1;
+      mu.passive_p2 = ms.passive_p2;
+      mu.passive_linear_stretch = ms.passive_linear_stretch;
+    }
+    std::vector<double> per_material(nmat), material_volume(nmat, 0.0);
+    std::vector<double> muscle_volume(spec_.muscles.size(), 0.0);
+    const double v0 = h_ * h_ * h_;
+    m.material_offsets.reserve(ne + 1);
+    m.material_offsets.push_back(0);
+    for (std::size_t e = 0; e < ne; ++e) {
+      std::fill(per_material.begin(), per_material.end(), 0.0);
+      for (auto q = fractions_.offsets[e]; q < fractions_.offsets[e + 1]; ++q) {
+        const auto lab = static_cast<std::size_t>(fractions_.labels[static_cast<std::size_t>(q)]);
+        const double f = fractions_.fractions[static_cast<std::size_t>(q)];
+        per_material[static_cast<std::size_t>(label_material_[lab])] += f;
+        if (label_muscle_[lab] >= 0) {
+          auto& mu = m.muscles[static_cast<std::size_t>(label_muscle_[lab])];
+          mu.elements.push_back(static_cast<formats::Index>(e));
+          mu.fractions.push_back(f);
+          muscle_volume[static_cast<std::size_t>(label_muscle_[lab])] += f * v0;
+        }
+      }
+      for (std::size_t k = 0; k < nmat; ++k) {
+        if (per_material[k] > 0) {
+          m.material_ids.push_back(static_cast<formats::Index>(k));
+          m.material_fractions.push_back(std::min(per_material[k], 1.0));
+          material_volume[k] += per_material[k] * v0;
+          s.tissue_volume += per_material[k] * v0;
+        }
+      }
+      m.material_offsets.push_back(static_cast<formats::Offset>(m.material_ids.size()));
+    }
+    for (std::size_t k = 0; k < nmat; ++k) {
+      s.material_volumes.push_back({m.materials[k].name, material_volume[k]});
+    }
+    for (std::size_t i = 0; i < spec_.muscles.size(); ++i) {
+      s.muscle_volumes.push_back({spec_.muscles[i].name, muscle_volume[i]});
+      const double mesh_volume = volume_of(muscles_[i]);
+      const double ratio = mesh_volume > 0 ? muscle_volume[i] / mesh_volume : 0.0;
+      if (muscle_volume[i] <= 0 || ratio < 0.5) {
+        throw GeometryError(spec_.muscles[i].mesh.describe(),
+                            "muscles[" + std::to_string(i) + "] " + spec_.muscles[i].name,
+                            "the muscle lies outside the tissue: only " +
+                                std::to_string(100.0 * ratio) +
+                                "% of its enclosed volume is inside the outer surface and "
+                                "outside the inner one");
+      }
+      if (ratio < 0.95) {
+        warn("muscle " + spec_.muscles[i].name + ": only " + std::to_string(100.0 * ratio) +
+             "% of its volume lies in the tissue");
+      }
+    }
+    s.elements = static_cast<std::int64_t>(ne);
+    s.nodes = static_cast<std::int64_t>(m.node_count());
+    // Release the fraction buffers we no longer need.
+    fractions_.labels = {};
+    fractions_.fractions = {};
+    fractions_.offsets = {};
+  }
+
+  Vec3d element_centre(formats::Index e) const {
+    const auto& l = result_.model.element_lattice[static_cast<std::size_t>(e)];
+    return {origin_.x + h_ * (l[0] + 0.5), origin_.y + h_ * (l[1] + 0.5),
+            origin_.z + h_ * (l[2] + 0.5)};
+  }
+
+  bool selects(const Selector& sel, const SignedField* surface, const Vec3d& p) const {
+    if (sel.box && !sel.box->contains(p)) return false;
+    if (surface && surface->distance().distance(p) > sel.distance) return false;
+    return true;
+  }
+
+  void fibres() {
+    auto& m = result_.model;
+    for (std::size_t i = 0; i < spec_.muscles.size(); ++i) {
+      const auto& ms = spec_.muscles[i];
+      auto& mu = m.muscles[i];
+      const std::size_t n = mu.elements.size();
+      if (ms.fibres.kind == FibreSpec::Kind::constant) {
+        mu.fibres.assign(n, to_point(ms.fibres.direction));
+        continue;
+      }
+      const SignedField* so =
+          ms.fibres.origin.surface ? named_surface(*ms.fibres.origin.surface) : nullptr;
+      const SignedField* si =
+          ms.fibres.insertion.surface ? named_surface(*ms.fibres.insertion.surface) : nullptr;
+      std::vector<formats::Lattice> voxels(n);
+      std::vector<DirichletTag> tags(n, DirichletTag::free);
+#pragma omp parallel for schedule(dynamic, 256)
+      for (std::int64_t j = 0; j < static_cast<std::int64_t>(n); ++j) {
+        const auto e = mu.elements[static_cast<std::size_t>(j)];
+        voxels[static_cast<std::size_t>(j)] = m.element_lattice[static_cast<std::size_t>(e)];
+        const Vec3d c = element_centre(e);
+        if (selects(ms.fibres.origin, so, c)) {
+          tags[static_cast<std::size_t>(j)] = DirichletTag::origin;
+        } else if (selects(ms.fibres.insertion, si, c)) {
+          tags[static_cast<std::size_t>(j)] = DirichletTag::insertion;
+        }
+      }
+      const auto hf = harmonic_fibres(voxels, tags, "muscles[" + std::to_string(i) + "] " + ms.name,
+                                      mu.fractions);
+      mu.fibres.resize(n);
+      for (std::size_t j = 0; j < n; ++j) mu.fibres[j] = to_point(hf.fibres[j]);
+      if (hf.fallback > 0) {
+        warn("muscle " + ms.name + ": " + std::to_string(hf.fallback) +
+             " voxels without a harmonic gradient got the origin-to-insertion axis");
+      }
+    }
+  }
+
+  std::map<std::string, formats::Index> sliding_surface_index_;
+
+  formats::Index add_sliding_surface(const SurfaceRef& ref) {
+    const std::string key = ref.mesh ? ref.field : ref.name;
+    const auto it = sliding_surface_index_.find(key);
+    if (it != sliding_surface_index_.end()) return it->second;
+    const TriangleMesh& mesh = named_mesh(ref);
+    formats::Surface s;
+    s.name = ref.mesh ? "sliding_" + std::to_string(sliding_surface_index_.size()) : ref.name;
+    s.role = formats::SurfaceRole::sliding;
+    for (const auto& v : mesh.vertices) s.vertices.push_back(to_point(v));
+    for (const auto& t : mesh.triangles) s.triangles.push_back({t[0], t[1], t[2]});
+    result_.model.surfaces.push_back(std::move(s));
+    const auto idx = static_cast<formats::Index>(result_.model.surfaces.size() - 1);
+    sliding_surface_index_.emplace(key, idx);
+    return idx;
+  }
+
+  void constraints() {
+    auto& m = result_.model;
+    auto& s = result_.summary;
+    std::vector<BoundaryCondition> conds;
+    for (const auto& b : spec_.boundary) {
+      BoundaryCondition c;
+      c.kind = b.kind;
+      c.inside = b.inside;
+      c.within = b.within;
+      c.box = b.box;
+      if (b.has_surface) {
+        c.surface = named_surface(b.surface);
+        if (!c.surface) {
+          throw ConfigError(spec_.file.string(), b.field + ".surface",
+                            "the inner surface is named but the spec has neither inner nor "
+                            "tissue_thickness");
+        }
+        if (b.kind == BoundarySpec::Kind::sliding) c.surface_index = add_sliding_surface(b.surface);
+      }
+      conds.push_back(c);
+    }
+    if (!conds.empty()) {
+      auto r = bind_constraints(m, conds);
+      m.rigid_nodes = std::move(r.rigid);
+      m.sliding = std::move(r.sliding);
+      for (std::size_t i = 0; i < conds.size(); ++i) {
+        if (r.per_condition[i] == 0) warn(spec_.boundary[i].field + ": selects no node");
+      }
+    }
+    s.rigid_nodes = static_cast<std::int64_t>(m.rigid_nodes.size());
+    s.sliding_nodes = static_cast<std::int64_t>(m.sliding.size());
+    for (const auto& ns : spec_.node_sets) {
+      const SignedField* surf = ns.select.surface ? named_surface(*ns.select.surface) : nullptr;
+      auto set = select_nodes(m, ns.name, ns.select.box, surf, ns.select.distance);
+      if (set.ids.empty()) warn("node set " + ns.name + " is empty");
+      s.node_sets.emplace_back(ns.name, static_cast<std::int64_t>(set.ids.size()));
+      m.node_sets.push_back(std::move(set));
+    }
+  }
+
+  void surfaces() {
+    auto& m = result_.model;
+    auto& s = result_.summary;
+    for (const auto& v : spec_.visual) {
+      const TriangleMesh& mesh = named_mesh(v.surface);
+      formats::Surface surf;
+      surf.name = v.name;
+      surf.role = formats::SurfaceRole::visual;
+      for (const auto& p : mesh.vertices) surf.vertices.push_back(to_point(p));
+      for (const auto& t : mesh.triangles) surf.triangles.push_back({t[0], t[1], t[2]});
+      auto emb = embed_points(m, surf.vertices);
+      surf.embedding_element = std::move(emb.element);
+      surf.embedding_local = std::move(emb.local);
+      s.embedded_vertices += static_cast<std::int64_t>(surf.vertices.size());
+      s.embedding_outside += emb.outside;
+      s.embedding_max_outside_distance =
+          std::max(s.embedding_max_outside_distance, emb.max_outside_distance);
+      if (emb.outside > 0) {
+        warn("visual surface " + v.name + ": " + std::to_string(emb.outside) +
+             " vertices lie in no element; bound to the nearest one (up to " +
+             std::to_string(emb.max_outside_distance) + " m away)");
+      }
+      m.surfaces.push_back(std::move(surf));
+    }
+  }
+
+  void provenance() {
+    auto& p = result_.model.provenance;
+    p.tool = "sinew-voxelize";
+    p.tool_version = sinew::kVersion;
+    p.created = formats::current_utc_iso8601();
+    std::vector<std::string> files;
+    if (!spec_.file.empty() && std::filesystem::exists(spec_.file))
+      files.push_back(spec_.file.string());
+    for (const auto& f : input_files_)
+      if (std::find(files.begin(), files.end(), f) == files.end()) files.push_back(f);
+    for (const auto& f : files) p.inputs.push_back({f, formats::sha256_file(f)});
+    p.parameters_json = spec_to_json(spec_);
+  }
+};
+
+}  // namespace
+
+VoxelizeResult voxelize(const Spec& spec, const VoxelizeOptions& options) {
+  const int previous = omp_get_max_threads();
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  try {
+    Pipeline pipeline(spec, options);
+    auto r = pipeline.run();
+    if (options.threads > 0) omp_set_num_threads(previous);
+    return r;
+  } catch (...) {
+    if (options.threads > 0) omp_set_num_threads(previous);
+    throw;
+  }
+}
+
+std::string summary_json(const Summary& s) {
+  nlohmann::json j;
+  j["output"] = s.output;
+  j["voxel_size_m"] = s.voxel_size;
+  j["dims"] = s.dims;
+  j["elements"] = s.elements;
+  j["nodes"] = s.nodes;
+  j["tissue_volume_m3"] = s.tissue_volume;
+  for (const auto& v : s.material_volumes) j["material_volumes_m3"][v.name] = v.volume;
+  for (const auto& v : s.muscle_volumes) j["muscle_volumes_m3"][v.name] = v.volume;
+  j["rigid_nodes"] = s.rigid_nodes;
+  j["sliding_nodes"] = s.sliding_nodes;
+  for (const auto& [n, c] : s.node_sets) j["node_sets"][n] = c;
+  for (const auto& m : s.meshes) {
+    const auto& d = m.diagnostics;
+    j["meshes"].push_back({{"role", m.role},
+                           {"source", m.source},
+                           {"vertices", d.vertices},
+                           {"triangles", d.triangles},
+                           {"duplicate_vertices_merged", d.duplicate_vertices_merged},
+                           {"degenerate_triangles_removed", d.degenerate_triangles_removed},
+                           {"duplicate_triangles_removed", d.duplicate_triangles_removed},
+                           {"boundary_edges", d.boundary_edges},
+                           {"non_manifold_edges", d.non_manifold_edges},
+                           {"components", d.components},
+                           {"inconsistently_oriented_edges", d.inconsistently_oriented_edges},
+                           {"closed", d.closed},
+                           {"area_m2", d.area},
+                           {"enclosed_volume_m3", d.enclosed_volume}});
+  }
+  j["embedding"] = {{"vertices", s.embedded_vertices},
+                    {"outside", s.embedding_outside},
+                    {"max_outside_distance_m", s.embedding_max_outside_distance}};
+  j["memory_estimate_bytes"] = s.memory_estimate_bytes;
+  j["memory_available_bytes"] = s.memory_available_bytes;
+  j["field_evaluations"] = s.field_evaluations;
+  j["threads"] = s.threads;
+  for (const auto& st : s.stages) {
+    j["stages"].push_back({{"name", st.name},
+                           {"seconds", st.seconds},
+                           {"cpu_seconds", st.cpu_seconds},
+                           {"peak_rss_bytes", st.peak_rss_bytes}});
+  }
+  j["warnings"] = s.warnings;
+  return j.dump(2);
+}
+
+std::string summary_text(const Summary& s) {
+  std::ostringstream o;
+  char buf[256];
+  auto line = [&](const char* fmt, auto... args) {
+    std::snprintf(buf, sizeof buf, fmt, args...);
+    o << buf << '\n';
+  };
+  if (!s.output.empty()) o << "model          " << s.output << '\n';
+  line("grid           %d x %d x %d voxels of %.6g mm", s.dims[0], s.dims[1], s.dims[2],
+       s.voxel_size * 1e3);
+  line("elements       %lld", static_cast<long long>(s.elements));
+  line("nodes          %lld", static_cast<long long>(s.nodes));
+  line("tissue volume  %.6g mm^3", s.tissue_volume * 1e9);
+  for (const auto& v : s.material_volumes) {
+    line("  material %-20s %14.6g mm^3", v.name.c_str(), v.volume * 1e9);
+  }
+  for (const auto& v : s.muscle_volumes) {
+    line("  muscle   %-20s %14.6g mm^3", v.name.c_str(), v.volume * 1e9);
+  }
+  line("rigid nodes    %lld", static_cast<long long>(s.rigid_nodes));
+  line("sliding nodes  %lld", static_cast<long long>(s.sliding_nodes));
+  for (const auto& [n, c] : s.node_sets)
+    line("  node set %-20s %lld nodes", n.c_str(), static_cast<long long>(c));
+  o << "surfaces\n";
+  for (const auto& m : s.meshes) {
+    const auto& d = m.diagnostics;
+    line("  %-22s %lld vertices, %lld triangles, %s, %lld components", m.role.c_str(),
+         static_cast<long long>(d.vertices), static_cast<long long>(d.triangles),
+         d.closed ? "closed" : "open", static_cast<long long>(d.components));
+    line(
+        "  %-22s merged %lld vertices, removed %lld degenerate; %lld boundary, %lld non-manifold, "
+        "%lld misoriented edges",
+        "", static_cast<long long>(d.duplicate_vertices_merged),
+        static_cast<long long>(d.degenerate_triangles_removed),
+        static_cast<long long>(d.boundary_edges), static_cast<long long>(d.non_manifold_edges),
+        static_cast<long long>(d.inconsistently_oriented_edges));
+    line("  %-22s area %.6g mm^2, enclosed volume %.6g mm^3 (%s)", "", d.area * 1e6,
+         d.enclosed_volume * 1e9, m.source.c_str());
+  }
+  line("embedding      %lld visual vertices, %lld outside every element",
+       static_cast<long long>(s.embedded_vertices), static_cast<long long>(s.embedding_outside));
+  line("memory         estimate %s, available %s", format_bytes(s.memory_estimate_bytes).c_str(),
+       format_bytes(s.memory_available_bytes).c_str());
+  line("stages         (%d threads, %lld field evaluations)", s.threads,
+       static_cast<long long>(s.field_evaluations));
+  double total = 0, cpu = 0;
+  for (const auto& st : s.stages) {
+    total += st.seconds;
+    cpu += st.cpu_seconds;
+    line("  %-12s %9.3f s  (cpu %8.3f s)   peak %s", st.name.c_str(), st.seconds, st.cpu_seconds,
+         format_bytes(st.peak_rss_bytes).c_str());
+  }
+  line("  %-12s %9.3f s  (cpu %8.3f s)", "total", total, cpu);
+  if (!s.warnings.empty()) {
+    o << "warnings\n";
+    for (const auto& w : s.warnings) o << "  " << w << '\n';
+  }
+  return o.str();
+}
+
+}  // namespace sinew::voxelizer
