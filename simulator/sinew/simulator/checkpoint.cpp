@@ -1,0 +1,87 @@
+#include "sinew/simulator/checkpoint.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+#include <fmt/format.h>
+
+#include "sinew/common/error.hpp"
+#include "sinew/formats/sha256.hpp"
+#include "sinew/simulator/hdf5_io.hpp"
+
+namespace sinew::simulator {
+
+std::string run_digest(const std::string& scene_text, const std::string& model_path,
+                       const std::string& precision) {
+  formats::Sha256 h;
+  h.update("scene\n");
+  h.update(scene_text);
+  h.update("\nmodel\n");
+  h.update(formats::sha256_file(model_path));
+  h.update("\nprecision\n");
+  h.update(precision);
+  return h.hex_digest();
+}
+
+void write_checkpoint(const std::string& path, const Checkpoint& c) {
+  const auto tmp = path + ".tmp-" + std::to_string(::getpid());
+  {
+    auto f = h5::create_file(tmp);
+    h5::set_attribute(f, "format", std::string(kCheckpointFormatName), tmp);
+    h5::set_attribute(f, "format_version", std::int64_t{kCheckpointFormatVersion}, tmp);
+    h5::set_attribute(f, "digest", c.digest, tmp);
+    h5::set_attribute(f, "scene_file", c.scene_file, tmp);
+    h5::set_attribute(f, "model_file", c.model_file, tmp);
+    const auto& s = c.state;
+    h5::set_attribute(f, "step", std::int64_t{s.step}, tmp);
+    h5::set_attribute(f, "time", s.time, tmp);
+    h5::set_attribute(f, "dt", s.dt, tmp);
+    h5::set_attribute(f, "external_work", s.external_work, tmp);
+    h5::set_attribute(f, "energy_reference", s.energy_reference, tmp);
+    if (s.u.size() != s.u_prev.size() || s.u.size() % 3 != 0) {
+      throw IoError(path, "/u", "state arrays u and u_prev differ in size");
+    }
+    const hsize_t n = s.u.size() / 3;
+    h5::write(f, "/u", {n, 3}, s.u.data(), tmp);
+    h5::write(f, "/u_prev", {n, 3}, s.u_prev.data(), tmp);
+    h5::write(f, "/sliding_triangle", {s.sliding_triangle.size()}, s.sliding_triangle.data(), tmp);
+    h5::flush(f, tmp);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw IoError(path, "", "cannot rename the checkpoint into place");
+  }
+}
+
+Checkpoint read_checkpoint(const std::string& path) {
+  auto f = h5::open_file(path, false);
+  if (!h5::has_attribute(f, "format") ||
+      h5::string_attribute(f, "format", path) != kCheckpointFormatName) {
+    throw FormatError(path, "format", "not a sinew checkpoint file");
+  }
+  const auto version = h5::int_attribute(f, "format_version", path);
+  if (version != kCheckpointFormatVersion) {
+    throw FormatError(path, "format_version",
+                      fmt::format("version {} is not supported (this build reads {})", version,
+                                  kCheckpointFormatVersion));
+  }
+  Checkpoint c;
+  c.digest = h5::string_attribute(f, "digest", path);
+  c.scene_file = h5::string_attribute(f, "scene_file", path);
+  c.model_file = h5::string_attribute(f, "model_file", path);
+  auto& s = c.state;
+  s.step = h5::int_attribute(f, "step", path);
+  s.time = h5::double_attribute(f, "time", path);
+  s.dt = h5::double_attribute(f, "dt", path);
+  s.external_work = h5::double_attribute(f, "external_work", path);
+  s.energy_reference = h5::double_attribute(f, "energy_reference", path);
+  const auto shape = h5::shape(f, "/u", path);
+  if (shape.size() != 2 || shape[1] != 3) throw FormatError(path, "/u", "expected shape N × 3");
+  s.u = h5::read<double>(f, "/u", path);
+  s.u_prev = h5::read<double>(f, "/u_prev", path, static_cast<std::int64_t>(s.u.size()));
+  s.sliding_triangle = h5::read<std::int32_t>(f, "/sliding_triangle", path);
+  return c;
+}
+
+}  // namespace sinew::simulator

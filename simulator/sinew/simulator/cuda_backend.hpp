@@ -1,0 +1,61 @@
+#pragma once
+// The CUDA backend (docs/cuda-backend.md): the Backend of engine.hpp on one NVIDIA GPU, calling the
+// same physics functions (physics/element.hpp) as the CPU backend. Host-only API: no CUDA headers.
+// Built when CMake's SINEW_CUDA_ENABLED is on; otherwise make_cuda_backend throws ConfigError
+// ("built without CUDA") and cuda_device_available() is false.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sinew/formats/model.hpp"
+#include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/setup.hpp"
+
+namespace sinew::simulator {
+
+// Force assembly. gather (default): each element writes its 8 nodal forces to an E × 8 buffer and
+// each node sums its (element, corner) entries in a fixed order: bit-identical from run to run.
+// atomic: elements add into the nodal forces with atomicAdd: no buffer, but the summation order,
+// hence the last bits, change from run to run.
+enum class ForceAssembly { gather, atomic };
+
+struct CudaOptions {
+  ForceAssembly assembly = ForceAssembly::gather;
+  // Steps per captured CUDA graph (rounded up to a multiple of 3, the displacement-buffer cycle);
+  // status flags are read once per graph launch.
+  int graph_steps = 96;
+  int device = 0;
+};
+
+// True when the CUDA runtime sees at least one device (false when built without CUDA).
+bool cuda_device_available();
+// "NVIDIA H200 (sm_90, 132 SMs, 139.8 GiB)" or "" without a device.
+std::string cuda_device_name();
+
+// The CUDA backend for the Setup's precision. Throws ConfigError on a bad Setup (make_plan), on a
+// build without CUDA or without a device, and sinew::Error on CUDA runtime failures.
+std::unique_ptr<Backend> make_cuda_backend(const formats::Model& model, const Setup& setup,
+                                           const CudaOptions& options = {});
+
+// Benchmark hooks of a CUDA backend (dynamic_cast a Backend made by make_cuda_backend).
+class CudaTiming {
+ public:
+  virtual ~CudaTiming() = default;
+  // Runs `launches` graph launches of graph_steps() steps each, timing each with CUDA events;
+  // returns milliseconds per launch. Status flags are checked once at the end (InstabilityError).
+  virtual std::vector<float> timed_graph_launches(int launches) = 0;
+  virtual int graph_steps() const = 0;
+  // Device time of each stage of one step (stage name, ms; median over `repeats` direct steps,
+  // each stage bracketed by CUDA events, so launch gaps are excluded). Advances the state.
+  virtual std::vector<std::pair<std::string, float>> stage_times(int repeats) = 0;
+  // Bytes one step must move at least (each array read or written once), for bandwidth figures.
+  virtual double bytes_per_step() const = 0;
+};
+
+// Device-to-device copy bandwidth (bytes read + bytes written per second) over `bytes` bytes,
+// median of `repeats` timed copies. Throws when built without CUDA.
+double measure_copy_bandwidth(std::size_t bytes, int repeats = 20);
+
+}  // namespace sinew::simulator

@@ -1,0 +1,80 @@
+#pragma once
+// The simulation engine: an abstract Backend (what the runner and the tests call) and the CPU
+// backend (OpenMP). The CUDA backend (cuda_backend.hpp) implements the same interface; both call the
+// same physics functions (physics/element.hpp) on the same prepared data (prepared_model.hpp).
+//
+// Step n -> n+1 (t_n = n·Δt, curves read at t_n / time_scaling):
+//  1. per element: F, C, J, S (neo-Hookean + muscles), nodal forces V0 F S ∇N, + hourglass forces,
+//     into a per-element force buffer (E × 8 × 3)
+//  2. per node: gather its (element, corner) entries in a fixed order -> internal force f
+//     (bit-identical for any thread count)
+//  3. external forces R (nodal forces, gravity); central-difference update of every node
+//  4. constraints: sliding surfaces, sliding planes, prescribed displacements, rigid nodes
+// Instability: NaN/Inf or J ≤ 0 (checked every step) or kinetic-energy blow-up (every
+// energy_interval steps) throws InstabilityError naming step, time, worst element/node and its
+// position; the state stays at u(n), where the problem was found (nothing non-finite is accepted).
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sinew/formats/model.hpp"
+#include "sinew/simulator/plan.hpp"
+#include "sinew/simulator/setup.hpp"
+#include "sinew/simulator/state.hpp"
+
+namespace sinew::simulator {
+
+struct Energies {
+  std::int64_t step = 0;
+  double time = 0;           // s
+  double kinetic = 0;        // J, ½ Σ m |v|², v = (u(n) − u(n−1))/Δt
+  double strain = 0;         // J, Σ_e V0 W_e (neo-Hookean + passive muscle + active at current a)
+  double hourglass = 0;      // J, Σ_e ½ k Σ q²
+  double external_work = 0;  // J, work of nodal forces, gravity and prescribed displacements
+};
+
+// Per-element output fields at the current state (E entries each).
+struct ElementFields {
+  std::vector<double> jacobian;               // J = det F
+  std::vector<double> von_mises;              // Pa, von Mises stress of the Cauchy stress
+  std::vector<std::array<double, 6>> cauchy;  // Pa, Cauchy stress σ = J⁻¹ F S Fᵀ, Voigt order
+                                              // (xx, yy, zz, yz, xz, xy)
+  std::vector<double> energy_density;         // J/m³ of reference volume (hourglass excluded)
+  std::vector<Index> material;                // dominant material (largest fraction)
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  virtual std::string name() const = 0;  // "cpu"
+  virtual const Plan& plan() const = 0;
+
+  // Advances n steps. Throws InstabilityError; the state then stays at the step where the problem
+  // was found (finite, readable, restorable).
+  virtual void step(std::int64_t n) = 0;
+  virtual std::int64_t step_index() const = 0;
+  virtual double time() const = 0;  // s, step_index() · dt()
+  virtual double dt() const = 0;
+
+  virtual State state() const = 0;
+  // Throws ConfigError when the state does not fit (node count, Δt, binding count).
+  virtual void restore(const State& state) = 0;
+
+  virtual std::vector<double> displacements() const = 0;  // N × 3, m, u(n)
+  virtual std::vector<double> velocities() const = 0;     // N × 3, m/s, (u(n) − u(n−1))/Δt
+  // Internal nodal forces f at u(n), N × 3, N (computed on demand).
+  virtual std::vector<double> internal_forces() = 0;
+  // Reaction at u(n): Σ over the nodes of (internal force − external load at t_n: gravity, nodal
+  // forces), N. At equilibrium this is the force the supports (constraints) exert on the body
+  // there; e.g. P11 · A0 on a pulled face. A node listed twice counts twice.
+  virtual std::array<double, 3> reaction(const std::vector<Index>& nodes) = 0;
+  virtual Energies energies() = 0;
+  virtual ElementFields element_fields() = 0;
+};
+
+// The CPU backend for the Setup's precision. Throws ConfigError on a bad Setup (see make_plan).
+std::unique_ptr<Backend> make_cpu_backend(const formats::Model& model, const Setup& setup);
+
+}  // namespace sinew::simulator

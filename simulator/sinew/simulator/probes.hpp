@@ -1,0 +1,54 @@
+#pragma once
+// Probe time series as CSV, one file per probe: <directory>/probe_<name>.csv.
+//   displacement probe:  time,step,ux,uy,uz   (m, the probe's node)
+//   reaction probe:      time,step,fx,fy,fz   (N, Σ of the internal nodal forces over the set: at
+//                                              rest, the force the supports exert on the body)
+// time is scene time (s). Every row is flushed as it is written, so an interrupted run keeps its
+// rows; numbers are printed with 17 significant digits (they read back exactly).
+#include <array>
+#include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sinew/simulator/scene.hpp"
+
+namespace sinew::simulator {
+
+class ProbeWriter {
+ public:
+  using Reaction = std::function<std::array<double, 3>(const std::vector<Index>& nodes)>;
+
+  // Creates (truncates) one CSV per probe and writes the header rows.
+  ProbeWriter(const std::string& directory, std::vector<ResolvedProbe> probes);
+  // Reopens the CSVs of an interrupted run, keeping the rows whose step is ≤ last_step.
+  // Throws FormatError when a file is missing or its header does not match.
+  static std::unique_ptr<ProbeWriter> resume(const std::string& directory,
+                                             std::vector<ResolvedProbe> probes,
+                                             std::int64_t last_step);
+  ~ProbeWriter();
+  ProbeWriter(const ProbeWriter&) = delete;
+  ProbeWriter& operator=(const ProbeWriter&) = delete;
+
+  // One row per probe. u: N × 3 displacements (m). `reaction` is called only for reaction probes.
+  void record(double time, std::int64_t step, const std::vector<double>& u,
+              const Reaction& reaction);
+
+  bool empty() const { return probes_.empty(); }
+  // The CSV path of probe i.
+  const std::string& path(std::size_t i) const { return paths_[i]; }
+  static std::string file_name(const std::string& probe_name) {
+    return "probe_" + probe_name + ".csv";
+  }
+  static std::string header(SceneProbe::Kind kind);
+
+ private:
+  ProbeWriter() = default;
+  std::vector<ResolvedProbe> probes_;
+  std::vector<std::string> paths_;
+  std::vector<std::FILE*> files_;
+};
+
+}  // namespace sinew::simulator

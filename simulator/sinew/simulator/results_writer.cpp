@@ -1,0 +1,358 @@
+#include "sinew/simulator/results_writer.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "sinew/common/error.hpp"
+#include "sinew/simulator/hdf5_io.hpp"
+
+namespace sinew::simulator {
+
+namespace fs = std::filesystem;
+
+std::vector<double> surface_positions(const formats::Model& model, const formats::Surface& surface,
+                                      const std::vector<double>& u) {
+  const std::size_t nv = surface.vertices.size();
+  std::vector<double> x(nv * 3);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const auto e = static_cast<std::size_t>(surface.embedding_element[v]);
+    const auto& q = surface.embedding_local[v];
+    const auto& nodes = model.element_nodes[e];
+    double d[3] = {0, 0, 0};
+    for (std::size_t a = 0; a < 8; ++a) {
+      const auto& c = formats::kHexCorner[a];
+      const double na = (1 + (2 * c[0] - 1) * q[0]) * (1 + (2 * c[1] - 1) * q[1]) *
+                        (1 + (2 * c[2] - 1) * q[2]) / 8;
+      const auto n = static_cast<std::size_t>(nodes[a]);
+      for (std::size_t k = 0; k < 3; ++k) d[k] += na * u[3 * n + k];
+    }
+    for (std::size_t k = 0; k < 3; ++k) x[3 * v + k] = surface.vertices[v][k] + d[k];
+  }
+  return x;
+}
+
+struct ResultsWriter::Impl {
+  h5::Handle file;
+  h5::Handle time, step, displacement, von_mises, jacobian, energy_density;
+  std::vector<h5::Handle> surfaces;  // positions per visual surface
+};
+
+namespace {
+
+std::string surface_group(const formats::Surface& s) {
+  return "/surfaces/" + s.name;
+}
+
+// Surface names come from the model file; they must not break the index's XML.
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::vector<std::int32_t> dominant_material(const formats::Model& model) {
+  std::vector<std::int32_t> out(model.element_count(), -1);
+  for (std::size_t e = 0; e < model.element_count(); ++e) {
+    double best = 0;
+    for (auto k = model.material_offsets[e]; k < model.material_offsets[e + 1]; ++k) {
+      const auto i = static_cast<std::size_t>(k);
+      if (model.material_fractions[i] > best) {
+        best = model.material_fractions[i];
+        out[e] = model.material_ids[i];
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+ResultsWriter::ResultsWriter(const std::string& directory, const formats::Model& model,
+                             ResultsOptions options)
+    : ResultsWriter(Resume{}, directory, model, std::move(options)) {
+  auto& f = impl_->file;
+  f = h5::create_file(h5_path_);
+  const auto& p = h5_path_;
+  h5::set_attribute(f, "format", std::string(kResultsFormatName), p);
+  h5::set_attribute(f, "format_version", std::int64_t{kResultsFormatVersion}, p);
+  h5::set_attribute(f, "model_file", options_.model_file, p);
+  h5::set_attribute(f, "scene_file", options_.scene_file, p);
+
+  const auto n = static_cast<hsize_t>(model.node_count());
+  const auto e = static_cast<hsize_t>(model.element_count());
+  {
+    auto mesh = h5::create_group(f, "/mesh", p);
+    std::vector<double> x(model.node_count() * 3);
+    for (std::size_t i = 0; i < model.node_count(); ++i) {
+      const auto q = model.node_position(static_cast<formats::Index>(i));
+      for (std::size_t k = 0; k < 3; ++k) x[3 * i + k] = q[k];
+    }
+    h5::write(f, "/mesh/rest_positions", {n, 3}, x.data(), p);
+    std::vector<std::int32_t> conn(model.element_count() * 8);
+    for (std::size_t i = 0; i < model.element_count(); ++i) {
+      for (std::size_t a = 0; a < 8; ++a) conn[8 * i + a] = model.element_nodes[i][a];
+    }
+    h5::write(f, "/mesh/connectivity", {e, 8}, conn.data(), p);
+    const auto mat = dominant_material(model);
+    h5::write(f, "/mesh/material", {e}, mat.data(), p);
+  }
+  auto frames = h5::create_group(f, "/frames", p);
+  impl_->time = h5::create_series(f, "/frames/time", {}, H5T_IEEE_F64LE, p);
+  impl_->step = h5::create_series(f, "/frames/step", {}, H5T_STD_I64LE, p);
+  impl_->displacement = h5::create_series(f, "/frames/displacement", {n, 3}, H5T_IEEE_F64LE, p);
+  if (options_.stress)
+    impl_->von_mises = h5::create_series(f, "/frames/von_mises", {e}, H5T_IEEE_F64LE, p);
+  if (options_.jacobian)
+    impl_->jacobian = h5::create_series(f, "/frames/J", {e}, H5T_IEEE_F64LE, p);
+  if (options_.energy_density) {
+    impl_->energy_density = h5::create_series(f, "/frames/energy_density", {e}, H5T_IEEE_F64LE, p);
+  }
+  if (options_.surfaces && !visual_.empty()) {
+    h5::create_group(f, "/surfaces", p);
+    for (auto s : visual_) {
+      const auto& surf = model.surfaces[s];
+      const auto g = surface_group(surf);
+      h5::create_group(f, g, p);
+      std::vector<std::int32_t> tri(surf.triangles.size() * 3);
+      for (std::size_t t = 0; t < surf.triangles.size(); ++t) {
+        for (std::size_t k = 0; k < 3; ++k) tri[3 * t + k] = surf.triangles[t][k];
+      }
+      h5::write(f, g + "/triangles", {surf.triangles.size(), 3}, tri.data(), p);
+      impl_->surfaces.push_back(
+          h5::create_series(f, g + "/positions", {surf.vertices.size(), 3}, H5T_IEEE_F64LE, p));
+    }
+  }
+  h5::flush(f, p);
+  write_index();
+}
+
+ResultsWriter::ResultsWriter(Resume, const std::string& directory, const formats::Model& model,
+                             ResultsOptions options)
+    : impl_(std::make_unique<Impl>()), model_(model), options_(std::move(options)) {
+  h5_path_ = (fs::path(directory) / "results.h5").string();
+  xdmf_path_ = (fs::path(directory) / "results.xdmf").string();
+  if (options_.surfaces) {
+    for (std::size_t s = 0; s < model.surfaces.size(); ++s) {
+      if (model.surfaces[s].role == formats::SurfaceRole::visual) visual_.push_back(s);
+    }
+  }
+}
+
+std::unique_ptr<ResultsWriter> ResultsWriter::resume(const std::string& directory,
+                                                     const formats::Model& model,
+                                                     ResultsOptions options,
+                                                     std::int64_t last_step) {
+  std::unique_ptr<ResultsWriter> w(
+      new ResultsWriter(Resume{}, directory, model, std::move(options)));
+  const auto& p = w->h5_path_;
+  auto& impl = *w->impl_;
+  impl.file = h5::open_file(p, true);
+  if (h5::string_attribute(impl.file, "format", p) != kResultsFormatName) {
+    throw FormatError(p, "format", "not a sinew results file");
+  }
+  const auto shape = h5::shape(impl.file, "/mesh/rest_positions", p);
+  if (shape.size() != 2 || shape[0] != model.node_count()) {
+    throw FormatError(p, "/mesh/rest_positions",
+                      "the results were written for another model (node count differs)");
+  }
+  const auto steps = h5::read<std::int64_t>(impl.file, "/frames/step", p);
+  const auto times = h5::read<double>(impl.file, "/frames/time", p);
+  std::size_t keep = 0;
+  while (keep < steps.size() && steps[keep] <= last_step) ++keep;
+  w->times_.assign(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(keep));
+  const auto open = [&](const std::string& name) {
+    auto ds = h5::open_dataset(impl.file, name, p);
+    h5::set_frames(ds, keep, p, name);
+    return ds;
+  };
+  impl.time = open("/frames/time");
+  impl.step = open("/frames/step");
+  impl.displacement = open("/frames/displacement");
+  const auto field = [&](bool wanted, const std::string& name, h5::Handle& h) {
+    if (wanted != h5::exists(impl.file, name)) {
+      throw FormatError(
+          p, name,
+          wanted ? "the results to resume lack this field (the scene's output fields changed)"
+                 : "the results to resume have a field the scene no longer asks for");
+    }
+    if (wanted) h = open(name);
+  };
+  field(w->options_.stress, "/frames/von_mises", impl.von_mises);
+  field(w->options_.jacobian, "/frames/J", impl.jacobian);
+  field(w->options_.energy_density, "/frames/energy_density", impl.energy_density);
+  for (auto s : w->visual_)
+    impl.surfaces.push_back(open(surface_group(model.surfaces[s]) + "/positions"));
+  h5::flush(impl.file, p);
+  w->write_index();
+  return w;
+}
+
+ResultsWriter::~ResultsWriter() = default;
+
+void ResultsWriter::append_frame(double time, std::int64_t step, const std::vector<double>& u,
+                                 const ElementFields& fields) {
+  const auto& p = h5_path_;
+  const auto f = static_cast<hsize_t>(times_.size());
+  const auto n = model_.node_count();
+  const auto e = model_.element_count();
+  if (u.size() != 3 * n)
+    throw IoError(p, "/frames/displacement",
+                  fmt::format("expected {} values, got {}", 3 * n, u.size()));
+  const auto check = [&](const std::vector<double>& v, const char* name) {
+    if (v.size() != e)
+      throw IoError(p, name, fmt::format("expected {} element values, got {}", e, v.size()));
+    return v.data();
+  };
+  auto& impl = *impl_;
+  h5::append(impl.displacement, f, H5T_NATIVE_DOUBLE, u.data(), p, "/frames/displacement");
+  if (options_.stress)
+    h5::append(impl.von_mises, f, H5T_NATIVE_DOUBLE, check(fields.von_mises, "/frames/von_mises"),
+               p, "/frames/von_mises");
+  if (options_.jacobian)
+    h5::append(impl.jacobian, f, H5T_NATIVE_DOUBLE, check(fields.jacobian, "/frames/J"), p,
+               "/frames/J");
+  if (options_.energy_density) {
+    h5::append(impl.energy_density, f, H5T_NATIVE_DOUBLE,
+               check(fields.energy_density, "/frames/energy_density"), p, "/frames/energy_density");
+  }
+  for (std::size_t i = 0; i < visual_.size(); ++i) {
+    const auto& surf = model_.surfaces[visual_[i]];
+    const auto x = surface_positions(model_, surf, u);
+    h5::append(impl.surfaces[i], f, H5T_NATIVE_DOUBLE, x.data(), p,
+               surface_group(surf) + "/positions");
+  }
+  // time and step last: a reader that sees the frame's time sees all of its data.
+  h5::append(impl.step, f, H5T_NATIVE_INT64, &step, p, "/frames/step");
+  h5::append(impl.time, f, H5T_NATIVE_DOUBLE, &time, p, "/frames/time");
+  h5::flush(impl.file, p);
+  times_.push_back(time);
+  write_index();
+}
+
+std::string ResultsWriter::xdmf_text() const {
+  const auto h5name = fs::path(h5_path_).filename().string();
+  const auto n = model_.node_count();
+  const auto e = model_.element_count();
+  const auto frames = times_.size();
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n "
+       "<Domain>\n";
+  // Frame f of a (frames, tail...) dataset as an XDMF hyperslab: rows start, stride, count.
+  const auto slab = [&](std::size_t f, const std::string& dataset, std::vector<std::size_t> tail) {
+    std::vector<std::size_t> start{f}, stride{1}, count{1}, full{frames};
+    for (auto t : tail) {
+      start.push_back(0);
+      stride.push_back(1);
+      count.push_back(t);
+      full.push_back(t);
+    }
+    return fmt::format(
+        "<DataItem ItemType=\"HyperSlab\" Dimensions=\"{count}\" Type=\"HyperSlab\">\n"
+        "       <DataItem Dimensions=\"3 {rank}\" Format=\"XML\">{start} {stride} "
+        "{count}</DataItem>\n"
+        "       <DataItem Dimensions=\"{full}\" NumberType=\"Float\" Precision=\"8\" "
+        "Format=\"HDF\">{h5}:{ds}</DataItem>\n"
+        "      </DataItem>",
+        fmt::arg("count", fmt::join(count, " ")), fmt::arg("rank", count.size()),
+        fmt::arg("start", fmt::join(start, " ")), fmt::arg("stride", fmt::join(stride, " ")),
+        fmt::arg("full", fmt::join(full, " ")), fmt::arg("h5", h5name), fmt::arg("ds", dataset));
+  };
+  x << "  <Grid Name=\"volume\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  for (std::size_t f = 0; f < frames; ++f) {
+    x << fmt::format("   <Grid Name=\"volume_{}\" GridType=\"Uniform\">\n", f);
+    x << fmt::format("    <Time Value=\"{:.17g}\"/>\n", times_[f]);
+    x << fmt::format(
+        "    <Topology TopologyType=\"Hexahedron\" NumberOfElements=\"{e}\">\n"
+        "     <DataItem Dimensions=\"{e} 8\" NumberType=\"Int\" Precision=\"4\" "
+        "Format=\"HDF\">{h5}:/mesh/connectivity</DataItem>\n"
+        "    </Topology>\n"
+        "    <Geometry GeometryType=\"XYZ\">\n"
+        "     <DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" "
+        "Format=\"HDF\">{h5}:/mesh/rest_positions</DataItem>\n"
+        "    </Geometry>\n"
+        "    <Attribute Name=\"material\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+        "     <DataItem Dimensions=\"{e}\" NumberType=\"Int\" Precision=\"4\" "
+        "Format=\"HDF\">{h5}:/mesh/material</DataItem>\n"
+        "    </Attribute>\n",
+        fmt::arg("e", e), fmt::arg("n", n), fmt::arg("h5", h5name));
+    x << "    <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n      "
+      << slab(f, "/frames/displacement", {n, 3}) << "\n    </Attribute>\n";
+    const auto cell = [&](bool on, const char* name, const char* ds) {
+      if (!on) return;
+      x << fmt::format(
+               "    <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Cell\">\n      ", name)
+        << slab(f, ds, {e}) << "\n    </Attribute>\n";
+    };
+    cell(options_.stress, "von_mises", "/frames/von_mises");
+    cell(options_.jacobian, "J", "/frames/J");
+    cell(options_.energy_density, "energy_density", "/frames/energy_density");
+    x << "   </Grid>\n";
+  }
+  x << "  </Grid>\n";
+  for (auto s : visual_) {
+    const auto& surf = model_.surfaces[s];
+    const auto g = surface_group(surf);
+    x << fmt::format(
+        "  <Grid Name=\"surface_{}\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+        xml_escape(surf.name));
+    for (std::size_t f = 0; f < frames; ++f) {
+      x << fmt::format("   <Grid Name=\"surface_{}_{}\" GridType=\"Uniform\">\n",
+                       xml_escape(surf.name), f);
+      x << fmt::format("    <Time Value=\"{:.17g}\"/>\n", times_[f]);
+      x << fmt::format(
+          "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"{t}\">\n"
+          "     <DataItem Dimensions=\"{t} 3\" NumberType=\"Int\" Precision=\"4\" "
+          "Format=\"HDF\">{h5}:{g}/triangles</DataItem>\n"
+          "    </Topology>\n"
+          "    <Geometry GeometryType=\"XYZ\">\n      ",
+          fmt::arg("t", surf.triangles.size()), fmt::arg("h5", h5name), fmt::arg("g", g));
+      x << slab(f, g + "/positions", {surf.vertices.size(), 3})
+        << "\n    </Geometry>\n   </Grid>\n";
+    }
+    x << "  </Grid>\n";
+  }
+  x << " </Domain>\n</Xdmf>\n";
+  return x.str();
+}
+
+void ResultsWriter::write_index() const {
+  const auto tmp = xdmf_path_ + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw IoError(tmp, "", "cannot create the XDMF index");
+    out << xdmf_text();
+    out.flush();
+    if (!out) throw IoError(tmp, "", "cannot write the XDMF index");
+  }
+  if (std::rename(tmp.c_str(), xdmf_path_.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw IoError(xdmf_path_, "", "cannot rename the XDMF index into place");
+  }
+}
+
+}  // namespace sinew::simulator

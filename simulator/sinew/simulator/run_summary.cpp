@@ -1,0 +1,102 @@
+#include "sinew/simulator/run_summary.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "sinew/common/error.hpp"
+
+namespace sinew::simulator {
+
+namespace {
+// JSON has no NaN/Inf: a diverged energy is written as null.
+nlohmann::json number(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+}  // namespace
+
+std::string to_json(const RunSummary& s) {
+  nlohmann::ordered_json j;
+  j["status"] = s.status;
+  j["message"] = s.message;
+  j["scene_file"] = s.scene_file;
+  j["model_file"] = s.model_file;
+  j["device"] = s.device;
+  j["precision"] = s.precision;
+  j["threads"] = s.threads;
+  j["effects"] = s.effects;
+  j["duration_s"] = s.duration;
+  j["time_scaling"] = s.time_scaling;
+  j["mass_scaling"] = s.mass_scaling;
+  j["dt_s"] = s.dt;
+  j["dt_critical_s"] = s.dt_critical;
+  j["dt_reason"] = s.dt_reason;
+  j["steps_planned"] = s.steps_planned;
+  j["steps_done"] = s.steps_done;
+  j["steps_this_run"] = s.steps_this_run;
+  j["restart_step"] = s.restart_step;
+  j["restart_file"] = s.restart_file;
+  j["simulated_time_s"] = s.simulated_time;
+  j["wall_time_s"] = s.wall_time_s;
+  j["time_per_step_s"] = s.time_per_step_s;
+  j["frames"] = s.frames;
+  auto energies = nlohmann::ordered_json::array();
+  for (const auto& e : s.energies) {
+    nlohmann::ordered_json row;
+    row["step"] = e.step;
+    row["time_s"] = number(e.time);
+    row["kinetic_J"] = number(e.kinetic);
+    row["strain_J"] = number(e.strain);
+    row["hourglass_J"] = number(e.hourglass);
+    row["external_work_J"] = number(e.external_work);
+    energies.push_back(std::move(row));
+  }
+  j["energies"] = std::move(energies);
+  j["warnings"] = s.warnings;
+  return j.dump(2) + "\n";
+}
+
+void write_run_summary(const std::string& path, const RunSummary& summary) {
+  const auto tmp = path + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw IoError(tmp, "", "cannot create the run summary");
+    out << to_json(summary);
+    out.flush();
+    if (!out) throw IoError(tmp, "", "cannot write the run summary");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw IoError(path, "", "cannot rename the run summary into place");
+  }
+}
+
+std::vector<Energies> read_energy_history(const std::string& path) {
+  std::vector<Energies> out;
+  std::ifstream in(path);
+  if (!in) return out;
+  const auto j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.contains("energies") || !j["energies"].is_array()) return out;
+  const auto num = [](const nlohmann::json& row, const char* key) {
+    const auto it = row.find(key);
+    return it != row.end() && it->is_number() ? it->get<double>() : std::nan("");
+  };
+  for (const auto& row : j["energies"]) {
+    if (!row.is_object() || !row.contains("step") || !row["step"].is_number_integer()) continue;
+    Energies e;
+    e.step = row["step"].get<std::int64_t>();
+    e.time = num(row, "time_s");
+    e.kinetic = num(row, "kinetic_J");
+    e.strain = num(row, "strain_J");
+    e.hourglass = num(row, "hourglass_J");
+    e.external_work = num(row, "external_work_J");
+    out.push_back(e);
+  }
+  return out;
+}
+
+}  // namespace sinew::simulator

@@ -1,0 +1,47 @@
+#pragma once
+// The run summary: <directory>/run_summary.json, rewritten (atomically) at every frame and at the
+// end, so an interrupted or failed run still says how far it got and why it stopped.
+// docs/results-format.md lists every key.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sinew/simulator/engine.hpp"
+
+namespace sinew::simulator {
+
+struct RunSummary {
+  std::string status = "running";  // running | completed | unstable | interrupted | failed
+  std::string message;             // why it stopped, when not completed
+  std::string scene_file, model_file;
+  std::string device;     // e.g. "cpu (OpenMP, 2 threads)"
+  std::string precision;  // "float" | "double"
+  int threads = 0;
+  std::vector<std::string> effects;
+  double duration = 0;  // s, scene time asked for
+  double time_scaling = 1, mass_scaling = 1;
+  double dt = 0;           // s, simulated time per step
+  double dt_critical = 0;  // s, the model's estimate
+  std::string dt_reason;
+  std::int64_t steps_planned = 0;
+  std::int64_t steps_done = 0;      // the engine's step index at the end
+  std::int64_t steps_this_run = 0;  // steps computed by this process (after a restart: fewer)
+  std::int64_t restart_step = -1;   // the checkpoint's step when resumed, −1 otherwise
+  std::string restart_file;
+  double simulated_time = 0;   // s, scene time reached
+  double wall_time_s = 0;      // this process
+  double time_per_step_s = 0;  // wall time of the step loop / steps_this_run
+  std::int64_t frames = 0;
+  std::vector<Energies> energies;  // one per frame, simulated time
+  std::vector<std::string> warnings;
+};
+
+// The JSON text of a summary (2-space indented).
+std::string to_json(const RunSummary& summary);
+// Writes it to `path` via a temporary file and rename. Throws IoError.
+void write_run_summary(const std::string& path, const RunSummary& summary);
+// The energy history of an existing summary; empty when the file is missing or unreadable (it is
+// informational and never blocks a restart).
+std::vector<Energies> read_energy_history(const std::string& path);
+
+}  // namespace sinew::simulator

@@ -1,0 +1,54 @@
+#pragma once
+// One simulation run from a scene file: what `sinew-simulate` does, as a library call so tests can
+// run it (and interrupt and resume it) without a process.
+//
+//   scene → parse → read model → resolve → engine (plan) → [explain] → step loop → outputs
+//
+// Outputs in the output directory (docs/results-format.md): results.h5 + results.xdmf (frames),
+// probe_<name>.csv, run_summary.json, checkpoint.h5 (with checkpoint_every or on interruption).
+// Frames: the first at t = 0, then one every output interval of scene time (at the first step at
+// or after it), and the last step; probes likewise at their interval (default every step).
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "sinew/simulator/run_summary.hpp"
+#include "sinew/simulator/scene.hpp"
+
+namespace sinew::simulator {
+
+struct RunOptions {
+  std::string scene_path;
+  std::string output_dir;              // created when missing
+  std::string device = "auto";         // cpu | cuda | auto
+  std::optional<Precision> precision;  // overrides the scene's
+  int threads = 0;                     // 0: OpenMP's default
+  bool quiet = false;                  // no progress bar
+  bool explain = false;                // print the plan first
+  bool run = true;                     // false: stop after the plan
+  std::string restart;                 // checkpoint to resume from ("" none)
+  std::int64_t checkpoint_every = 0;   // steps between checkpoints (0: none)
+  // Stop once this step is reached, writing a checkpoint there, as an interruption would (tests
+  // use it to cut a run in two); −1: run to the end.
+  std::int64_t stop_at_step = -1;
+  // Receives the plan text (default: stdout).
+  std::function<void(const std::string&)> print;
+};
+
+struct RunResult {
+  RunSummary summary;
+  std::string output_dir;
+  bool ran = false;  // false when only the plan was printed
+};
+
+// Runs (or explains) a scene. Throws ConfigError / FormatError / IoError / ResourceError before
+// the loop starts. An instability during the loop is written to the summary (status "unstable")
+// with every frame so far intact, and then rethrown as InstabilityError. SIGINT/SIGTERM during the
+// loop stop it at the next step boundary with a checkpoint (status "interrupted").
+RunResult run_scene(const RunOptions& options);
+
+// Installs SIGINT/SIGTERM handlers that ask a running loop to stop (the tool calls it once).
+void install_interrupt_handlers();
+
+}  // namespace sinew::simulator

@@ -1,0 +1,236 @@
+// sinew-render: draws a results file's visual surface into PNG images with a software rasteriser
+// (no window, no GPU): one frame, every frame, a contact sheet, and an animated GIF or MP4 when
+// ffmpeg or ImageMagick is installed. docs/visual-output.md.
+//
+//   sinew-render RESULTS [--surface NAME] [--frame N | --all] [--view front|side|top|three-quarter]
+//                [--up y|z] [--color none|displacement] [--colormap viridis|blue-red]
+//                [--size WxH] [-o OUT.png | --sequence DIR] [--contact-sheet OUT.png
+//                [--columns 4] [--sheet-frames 8]] [--gif OUT.gif | --mp4 OUT.mp4] [--fps 12]
+//
+// Exit status: 0 done, 1 bad input, I/O error or a missing GIF/MP4 encoder, 2 bad command line
+// (including a frame out of range).
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include <unistd.h>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "sinew/common/error.hpp"
+#include "sinew/simulator/export/contact_sheet.hpp"
+#include "sinew/simulator/export/png_writer.hpp"
+#include "sinew/simulator/export/render_session.hpp"
+#include "sinew/simulator/export/results_reader.hpp"
+
+namespace {
+
+using namespace sinew;
+using namespace sinew::simulator::visual;
+
+bool on_path(const std::string& program) {
+  const char* path = std::getenv("PATH");
+  if (!path) return false;
+  std::string all = path;
+  std::size_t start = 0;
+  while (start <= all.size()) {
+    const auto end = std::min(all.find(':', start), all.size());
+    const auto dir = all.substr(start, end - start);
+    if (!dir.empty()) {
+      std::error_code ec;
+      const auto p = std::filesystem::path(dir) / program;
+      if (std::filesystem::is_regular_file(p, ec)) return true;
+    }
+    start = end + 1;
+  }
+  return false;
+}
+
+// `convert` must be ImageMagick's (its -version output starts with "Version: ImageMagick").
+bool imagemagick_available() {
+  if (!on_path("convert")) return false;
+  std::FILE* p = popen("convert -version 2>/dev/null", "r");
+  if (!p) return false;
+  char line[256] = {};
+  const bool ok = std::fgets(line, sizeof line, p) != nullptr;
+  pclose(p);
+  return ok && std::string(line).rfind("Version: ImageMagick", 0) == 0;
+}
+
+std::string quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+void parse_size(const std::string& text, int& w, int& h) {
+  if (std::sscanf(text.c_str(), "%dx%d", &w, &h) != 2 || w < 8 || h < 8 || w > 16384 || h > 16384) {
+    throw ConfigError("", "--size", fmt::format("\"{}\" is not WxH with 8 ≤ W, H ≤ 16384", text));
+  }
+}
+
+// Renders every frame into `dir` as frame_0000.png, ...; returns the printf pattern.
+std::string write_sequence(const FrameRenderer& renderer, std::size_t frames,
+                           const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw IoError(dir, "", "cannot create the directory: " + ec.message());
+  for (std::size_t k = 0; k < frames; ++k) {
+    write_png((std::filesystem::path(dir) / fmt::format("frame_{:04}.png", k)).string(),
+              renderer.render(k));
+  }
+  return (std::filesystem::path(dir) / "frame_%04d.png").string();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"sinew-render: software-rendered PNG images of a sinew results file's surface"};
+  std::string results, surface, view = "three-quarter", up = "y", color = "none",
+                                colormap = "viridis", size = "800x600", output, sequence, sheet,
+                                gif, mp4;
+  int frame = -1, columns = 4, sheet_frames = 8, fps = 12;
+  bool all = false;
+  app.add_option("results", results, "results.h5 written by sinew-simulate")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--surface", surface,
+                 "Visual surface (default: the only one; \"volume\": the volume's boundary, also "
+                 "used when the file has no surface)");
+  auto* frame_opt = app.add_option("--frame", frame, "Frame index to draw (default: the last)")
+                        ->check(CLI::NonNegativeNumber);
+  app.add_flag("--all", all, "Draw every frame (with --sequence)")->excludes(frame_opt);
+  app.add_option("--view", view, "Camera: front, side, top or three-quarter")
+      ->check(CLI::IsMember({"front", "side", "top", "three-quarter"}));
+  app.add_option("--up", up, "The results' up axis: y or z")->check(CLI::IsMember({"y", "z"}));
+  app.add_option("--color", color, "Colouring: none or displacement (|u| of the surface)")
+      ->check(CLI::IsMember({"none", "displacement"}));
+  app.add_option("--colormap", colormap, "Colour map: viridis or blue-red")
+      ->check(CLI::IsMember({"viridis", "blue-red"}));
+  app.add_option("--size", size, "Image size WxH in pixels");
+  app.add_option("-o,--output", output, "PNG of one frame");
+  app.add_option("--sequence", sequence, "Folder for one PNG per frame (frame_0000.png, ...)");
+  app.add_option("--contact-sheet", sheet, "PNG with several frames tiled and labelled");
+  app.add_option("--columns", columns, "Contact sheet columns")->check(CLI::PositiveNumber);
+  app.add_option("--sheet-frames", sheet_frames, "Frames on the contact sheet, evenly spread")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--gif", gif, "Animated GIF of all frames (needs ffmpeg or ImageMagick)");
+  app.add_option("--mp4", mp4, "MP4 video of all frames (needs ffmpeg)");
+  app.add_option("--fps", fps, "Frames per second of the GIF/MP4")->check(CLI::PositiveNumber);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help exits 0; every command-line mistake exits 2.
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+
+  try {
+    if (output.empty() && sequence.empty() && sheet.empty() && gif.empty() && mp4.empty()) {
+      throw ConfigError("", "command line",
+                        "nothing to draw: give -o, --sequence, --contact-sheet, --gif or --mp4");
+    }
+    if (all && sequence.empty()) {
+      throw ConfigError("", "--all", "--all draws every frame into --sequence DIR");
+    }
+    // Check the GIF/MP4 tools before the work.
+    const bool have_ffmpeg = on_path("ffmpeg");
+    if (!mp4.empty() && !have_ffmpeg) {
+      throw ResourceError("", "--mp4",
+                          "unavailable: ffmpeg is not on PATH (write --sequence DIR "
+                          "and encode the PNGs elsewhere)");
+    }
+    const bool have_magick = !gif.empty() && !have_ffmpeg && imagemagick_available();
+    if (!gif.empty() && !have_ffmpeg && !have_magick) {
+      throw ResourceError("", "--gif",
+                          "unavailable: neither ffmpeg nor ImageMagick's convert is "
+                          "on PATH (write --sequence DIR and encode the PNGs "
+                          "elsewhere)");
+    }
+    FrameRenderSettings s;
+    parse_size(size, s.width, s.height);
+    s.view = parse_view(view);
+    s.up = parse_up_axis(up);
+    s.color_displacement = color == "displacement";
+    s.map = parse_color_map(colormap);
+    const auto anim = read_surface(results, surface);
+    const std::size_t frames = anim.frame_count();
+    if (frame >= 0 && static_cast<std::size_t>(frame) >= frames) {
+      throw ConfigError(
+          results, "--frame",
+          fmt::format("frame {} out of range: the file has {} frames", frame, frames));
+    }
+    const std::size_t chosen = frame >= 0 ? static_cast<std::size_t>(frame) : frames - 1;
+    const FrameRenderer renderer(anim, s);
+    std::printf("%s: surface \"%s\", %zu vertices, %zu triangles, %zu frames (t = %g .. %g s)\n",
+                results.c_str(), anim.name.c_str(), anim.vertex_count(), anim.triangle_count(),
+                frames, anim.times.front(), anim.times.back());
+    if (s.color_displacement) {
+      std::printf("colour: displacement 0 .. %.4g mm\n", 1000.0 * renderer.max_displacement());
+    }
+    if (!output.empty()) {
+      write_png(output, renderer.render(chosen));
+      std::printf("wrote %s (frame %zu)\n", output.c_str(), chosen);
+    }
+    if (!sequence.empty()) {
+      if (all || frame < 0) {
+        write_sequence(renderer, frames, sequence);
+        std::printf("wrote %zu frames into %s\n", frames, sequence.c_str());
+      } else {
+        std::filesystem::create_directories(sequence);
+        const auto p = (std::filesystem::path(sequence) / fmt::format("frame_{:04}.png", chosen));
+        write_png(p.string(), renderer.render(chosen));
+        std::printf("wrote %s\n", p.string().c_str());
+      }
+    }
+    if (!sheet.empty()) {
+      std::vector<Image> tiles;
+      std::vector<std::string> labels;
+      FrameRenderSettings tile_settings = s;
+      tile_settings.caption = false;
+      const FrameRenderer tile_renderer(anim, tile_settings);
+      for (auto k : spread_frames(frames, static_cast<std::size_t>(sheet_frames))) {
+        tiles.push_back(tile_renderer.render(k));
+        labels.push_back(frame_label(anim, k));
+      }
+      ContactSheetOptions co;
+      co.columns = columns;
+      co.font_scale = std::max(1, s.height / 200);
+      write_png(sheet, contact_sheet(tiles, labels, co));
+      std::printf("wrote %s (%zu frames)\n", sheet.c_str(), tiles.size());
+    }
+    for (const auto* target : {&gif, &mp4}) {
+      if (target->empty()) continue;
+      const auto tmp = std::filesystem::temp_directory_path() /
+                       fmt::format("sinew-render-{}-{}", static_cast<long>(getpid()),
+                                   target == &gif ? "gif" : "mp4");
+      const auto pattern = write_sequence(renderer, frames, tmp.string());
+      std::string cmd;
+      if (have_ffmpeg) {
+        cmd = fmt::format("ffmpeg -loglevel error -y -framerate {} -i {} ", fps, quote(pattern));
+        cmd += target == &gif
+                   ? quote(gif)
+                   : "-pix_fmt yuv420p -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' " + quote(mp4);
+      } else {
+        cmd = fmt::format("convert -delay {} -loop 0 {}/frame_*.png {}", std::max(1, 100 / fps),
+                          quote(tmp.string()), quote(gif));
+      }
+      const int rc = std::system(cmd.c_str());
+      std::error_code ec;
+      std::filesystem::remove_all(tmp, ec);
+      if (rc != 0) throw IoError(*target, "", "the encoder failed: " + cmd);
+      std::printf("wrote %s\n", target->c_str());
+    }
+  } catch (const sinew::ConfigError& e) {
+    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
+    return 2;
+  } catch (const sinew::Error& e) {
+    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,189 @@
+// CUDA backend against the CPU backend, reproducibility, restart and instability detection.
+// Every case skips with "no CUDA device" when no GPU is present (CI).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "engine_test_support.hpp"
+#include "sinew/common/error.hpp"
+#include "sinew/simulator/benchmark_models.hpp"
+#include "sinew/simulator/cuda_backend.hpp"
+
+namespace sinew::simulator::testing {
+namespace {
+using SimSetup = sinew::simulator::Setup;
+
+#define SKIP_WITHOUT_GPU() \
+  if (!cuda_device_available()) GTEST_SKIP() << "no CUDA device"
+
+// A small forehead-like model: 2 muscles, fibres, sliding bottom nodes over a curved skull,
+// rigid y_max edge, activation ramped over the run.
+struct Scene {
+  formats::Model model;
+  SimSetup setup;
+};
+
+Scene muscle_sliding_scene(Precision p) {
+  Scene s;
+  s.model = make_forehead_model(24, 12, 4, 0.5e-3);
+  SimSetup& st = s.setup;
+  st.precision = p;
+  st.effects.muscles = true;
+  st.effects.sliding = true;
+  st.effects.damping = true;
+  st.effects.gravity = true;
+  st.damping_alpha = 200;
+  st.activation = {Curve::ramp(2e-3, 0.05), Curve::ramp(3e-3, 0.025)};
+  for (const auto& ns : s.model.node_sets)
+    if (ns.name == "y_max") st.rigid_nodes = ns.ids;
+  st.duration = 1;
+  return s;
+}
+
+double max_abs(const std::vector<double>& v) {
+  double m = 0;
+  for (double x : v) m = std::max(m, std::abs(x));
+  return m;
+}
+double max_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::abs(a[i] - b[i]));
+  return m;
+}
+
+TEST(CudaBackend, AgreesWithCpuOnAMuscleAndSlidingModelAfterManySteps) {
+  SKIP_WITHOUT_GPU();
+  for (Precision p : {Precision::float32, Precision::float64}) {
+    const Scene s = muscle_sliding_scene(p);
+    auto cpu = make_cpu_backend(s.model, s.setup);
+    auto gpu = make_cuda_backend(s.model, s.setup);
+    ASSERT_EQ(cpu->dt(), gpu->dt());
+    const std::int64_t steps = 2000;
+    cpu->step(steps);
+    gpu->step(steps);
+    const auto uc = cpu->displacements(), ug = gpu->displacements();
+    const double scale = max_abs(uc), diff = max_diff(uc, ug);
+    ASSERT_GT(scale, 1e-7) << "the scene must move";
+    const double measure = diff / scale;
+    std::printf(
+        "[ measured ] %s, %lld steps: max|u_gpu - u_cpu| / max|u_cpu| = %.3g (max|u| = %.3g m)\n",
+        p == Precision::float32 ? "float" : "double", static_cast<long long>(steps), measure,
+        scale);
+    EXPECT_LT(measure, p == Precision::float32 ? 1e-3 : 1e-9);
+    const Energies ec = cpu->energies(), eg = gpu->energies();
+    EXPECT_NEAR(eg.strain, ec.strain,
+                (p == Precision::float32 ? 1e-3 : 1e-9) * std::abs(ec.strain));
+    EXPECT_NEAR(eg.external_work, ec.external_work,
+                (p == Precision::float32 ? 1e-3 : 1e-9) * std::abs(ec.external_work) + 1e-30);
+    const auto fc = cpu->element_fields(), fg = gpu->element_fields();
+    EXPECT_LT(max_diff(fc.jacobian, fg.jacobian), p == Precision::float32 ? 1e-3 : 1e-12);
+  }
+}
+
+TEST(CudaBackend, GatherAssemblyIsBitReproducibleFromRunToRun) {
+  SKIP_WITHOUT_GPU();
+  const Scene s = muscle_sliding_scene(Precision::float32);
+  std::vector<double> first;
+  for (int run = 0; run < 3; ++run) {
+    auto gpu = make_cuda_backend(s.model, s.setup);
+    gpu->step(777);
+    const auto u = gpu->displacements();
+    if (run == 0)
+      first = u;
+    else
+      EXPECT_EQ(0, std::memcmp(first.data(), u.data(), u.size() * sizeof(double))) << "run " << run;
+  }
+  // Atomic assembly: same physics to float precision (its last bits may change between runs).
+  CudaOptions atomic;
+  atomic.assembly = ForceAssembly::atomic;
+  auto a = make_cuda_backend(s.model, s.setup, atomic);
+  a->step(777);
+  const auto ua = a->displacements();
+  const double measure = max_diff(first, ua) / max_abs(first);
+  std::printf("[ measured ] atomic vs gather, 777 float steps: max|du| / max|u| = %.3g\n", measure);
+  EXPECT_LT(measure, 1e-3);
+}
+
+TEST(CudaBackend, RestoredRunContinuesBitIdentically) {
+  SKIP_WITHOUT_GPU();
+  const Scene s = muscle_sliding_scene(Precision::float32);
+  auto a = make_cuda_backend(s.model, s.setup);
+  a->step(300);
+  const State mid = a->state();
+  a->step(401);
+  auto b = make_cuda_backend(s.model, s.setup);
+  b->restore(mid);
+  b->step(401);
+  EXPECT_EQ(a->step_index(), b->step_index());
+  const auto ua = a->displacements(), ub = b->displacements();
+  EXPECT_EQ(0, std::memcmp(ua.data(), ub.data(), ua.size() * sizeof(double)));
+  EXPECT_EQ(a->state().sliding_triangle, b->state().sliding_triangle);
+}
+
+TEST(CudaBackend, InstabilityIsDetectedWithTheStateAtTheLastGoodStep) {
+  SKIP_WITHOUT_GPU();
+  const auto model = block(8, 8, 8, 1e-3, neo_hookean(1000, 0.49, 1000));
+  SimSetup s;
+  s.precision = Precision::float32;
+  s.duration = 1;
+  const Plan probe = make_plan(model, s);
+  s.time_step.policy = TimeStepPolicy::forced;
+  s.time_step.user_dt = 1.3 * probe.dt_critical;
+  s.initial_velocities.push_back({nodes_at(model, 2, 8), {0, 0, 0.05}});
+  auto gpu = make_cuda_backend(model, s);
+  std::string message;
+  try {
+    gpu->step(20000);
+  } catch (const InstabilityError& e) {
+    message = e.what();
+  }
+  ASSERT_FALSE(message.empty()) << "no instability detected";
+  std::printf("[ measured ] %s\n", message.c_str());
+  EXPECT_NE(message.find("at step"), std::string::npos);
+  for (double v : gpu->displacements()) ASSERT_TRUE(std::isfinite(v)) << "state not at a good step";
+}
+
+TEST(CudaBackend, InternalForcesAndReactionsMatchTheCpu) {
+  SKIP_WITHOUT_GPU();
+  const Scene s = muscle_sliding_scene(Precision::float64);
+  auto cpu = make_cpu_backend(s.model, s.setup);
+  auto gpu = make_cuda_backend(s.model, s.setup);
+  cpu->step(150);
+  gpu->step(150);
+  const auto fc = cpu->internal_forces(), fg = gpu->internal_forces();
+  EXPECT_LT(max_diff(fc, fg) / max_abs(fc), 1e-9);
+  const auto rc = cpu->reaction(s.setup.rigid_nodes), rg = gpu->reaction(s.setup.rigid_nodes);
+  for (int d = 0; d < 3; ++d)
+    EXPECT_NEAR(rg[std::size_t(d)], rc[std::size_t(d)],
+                1e-9 * (std::abs(rc[std::size_t(d)]) + 1e-12));
+}
+
+TEST(CudaBackend, BenchmarkModelsHaveTable2Sizes) {
+  // Runs without a GPU: the generators are host code. Paper Table 2 counts within 5%.
+  const auto skin = make_skin_block_model();
+  EXPECT_EQ(skin.element_count(), 129600u);
+  EXPECT_EQ(skin.node_count(), 146410u);
+  const auto body = make_soft_body_model();
+  EXPECT_NEAR(double(body.element_count()), 15107.0, 0.05 * 15107);
+  EXPECT_NEAR(double(body.node_count()), 19698.0, 0.05 * 19698);
+}
+
+#if !defined(SINEW_CUDA_ENABLED)
+TEST(CudaBackend, BuiltWithoutCudaSaysSo) {
+  const auto model = block(2, 2, 2, 1e-3, neo_hookean(1000, 0.3));
+  SimSetup s;
+  s.duration = 1e-3;
+  try {
+    make_cuda_backend(model, s);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("built without CUDA"), std::string::npos);
+  }
+}
+#endif
+
+}  // namespace
+}  // namespace sinew::simulator::testing

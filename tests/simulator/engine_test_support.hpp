@@ -1,0 +1,126 @@
+#pragma once
+// Shared helpers of the simulator physics tests. Tests take a BackendFactory so the same test code
+// runs on every backend listed in a test file's kBackends (a backend that cannot run here, e.g.
+// CUDA without a device, makes its cases skip: backend_missing).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "sinew/formats/box_model.hpp"
+#include "sinew/formats/model.hpp"
+#include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/setup.hpp"
+
+namespace sinew::simulator::testing {
+
+using BackendFactory = std::function<std::unique_ptr<Backend>(const formats::Model&, const Setup&)>;
+
+struct NamedBackend {
+  std::string name;
+  BackendFactory make;
+  // Null: the backend always runs. Otherwise, when it returns false, every case on this backend
+  // skips with the message `missing` (e.g. the CUDA backend without a device).
+  bool (*available)() = nullptr;
+  const char* missing = "";
+};
+inline bool backend_missing(const NamedBackend& b) {
+  return b.available != nullptr && !b.available();
+}
+inline const NamedBackend& backend_of(const NamedBackend& b) {
+  return b;
+}
+template <typename... Rest>
+const NamedBackend& backend_of(const std::tuple<NamedBackend, Rest...>& p) {
+  return std::get<0>(p);
+}
+
+// A test parametrised on a backend (alone or first in a tuple): skips where it cannot run.
+template <typename Param>
+class BackendTest : public ::testing::TestWithParam<Param> {
+ protected:
+  void SetUp() override {
+    const NamedBackend& b = backend_of(this->GetParam());
+    if (backend_missing(b)) GTEST_SKIP() << b.missing;
+  }
+};
+inline std::string backend_name(const ::testing::TestParamInfo<NamedBackend>& info) {
+  return info.param.name;
+}
+
+// A TLED neo-Hookean material from μ and ν.
+inline formats::Material neo_hookean(double mu, double nu, double density = 1000.0,
+                                     const std::string& name = "tissue") {
+  formats::Material m;
+  m.name = name;
+  m.youngs_modulus = 2 * mu * (1 + nu);
+  m.poisson_ratio = nu;
+  m.shear_modulus = mu;
+  m.bulk_modulus = m.youngs_modulus / (3 * (1 - 2 * nu));
+  m.density = density;
+  return m;
+}
+
+// A block of nx × ny × nz cubes of side h with one material.
+inline formats::Model block(int nx, int ny, int nz, double h, const formats::Material& mat) {
+  formats::BoxSpec spec;
+  spec.dims = {nx, ny, nz};
+  spec.voxel_size = h;
+  spec.materials = {mat};
+  spec.created = "2026-01-01T00:00:00Z";
+  return formats::make_box_model(spec);
+}
+
+// Nodes whose lattice coordinate along `axis` equals `value`.
+inline std::vector<Index> nodes_at(const formats::Model& m, int axis, int value) {
+  std::vector<Index> out;
+  for (std::size_t n = 0; n < m.node_count(); ++n)
+    if (m.node_lattice[n][std::size_t(axis)] == value) out.push_back(Index(n));
+  return out;
+}
+inline std::vector<Index> nodes_if(const formats::Model& m,
+                                   const std::function<bool(const formats::Lattice&)>& pred) {
+  std::vector<Index> out;
+  for (std::size_t n = 0; n < m.node_count(); ++n)
+    if (pred(m.node_lattice[n])) out.push_back(Index(n));
+  return out;
+}
+
+inline std::array<double, 3> node_u(const std::vector<double>& u, Index n) {
+  return {u[3 * std::size_t(n)], u[3 * std::size_t(n) + 1], u[3 * std::size_t(n) + 2]};
+}
+
+// Steps in batches until the kinetic energy falls below `ke_tol` (J) or max_steps pass.
+// Returns the final kinetic energy.
+inline double relax(Backend& b, std::int64_t max_steps, double ke_tol, std::int64_t batch = 200) {
+  double ke = b.energies().kinetic;
+  for (std::int64_t s = 0; s < max_steps; s += batch) {
+    b.step(batch);
+    ke = b.energies().kinetic;
+    if (ke < ke_tol && s > batch) break;
+  }
+  return ke;
+}
+
+// A uniaxial-style Setup: damped, loads on, user-chosen safety factor.
+inline Setup static_setup(double alpha) {
+  Setup s;
+  s.effects.damping = true;
+  s.effects.loads = true;
+  s.damping_alpha = alpha;
+  s.time_step.safety_factor = 0.5;
+  return s;
+}
+
+// Lowest-mode-ish critical damping for a block of side L: α = 2 ω with ω = π c / (2 L),
+// c = sqrt(μ/ρ) (shear wave speed; the slowest waves).
+inline double critical_alpha(double mu, double rho, double length) {
+  return 2.0 * M_PI * std::sqrt(mu / rho) / (2.0 * length);
+}
+
+}  // namespace sinew::simulator::testing
