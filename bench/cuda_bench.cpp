@@ -1,0 +1,213 @@
+// CUDA backend benchmark on the three Table-2-sized models (Warburton & Maddock 2013, GTX 680):
+// ms per step (CUDA events around graph launches, warm-up, median), element-steps per second,
+// achieved bandwidth against a measured device-to-device copy, stage shares from variants that
+// leave one stage out, float/double, gather/atomic, and the CPU backend on the same machine. Usage:
+// cuda_bench [--quick] (quick: fewer launches, for checking the program).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sinew/simulator/benchmark_models.hpp"
+#include "sinew/simulator/cuda_backend.hpp"
+#include "sinew/simulator/engine.hpp"
+
+using namespace sinew;
+using namespace sinew::simulator;
+
+namespace {
+
+struct Case {
+  std::string name;
+  double paper_ms;  // GTX 680, Table 2
+  formats::Model model;
+  Setup setup;
+};
+
+const std::vector<Index>* node_set(const formats::Model& m, const std::string& name) {
+  for (const auto& s : m.node_sets)
+    if (s.name == name) return &s.ids;
+  return nullptr;
+}
+
+Case skin_block() {
+  Case c{"skin block", 1.48, make_skin_block_model(), {}};
+  Setup& s = c.setup;
+  s.effects.damping = true;
+  s.effects.loads = true;
+  s.damping_alpha = 100;
+  s.duration = 1;
+  s.rigid_nodes = *node_set(c.model, "x_min");
+  PrescribedDisplacement p;
+  p.nodes = *node_set(c.model, "x_max");
+  p.components = {true, false, false};
+  p.value = {-0.1 * 120 * 0.25e-3, 0, 0};
+  p.curve = Curve::ramp(0.05, 1.0);
+  s.prescribed.push_back(p);
+  return c;
+}
+
+Case forehead() {
+  Case c{"face-scale forehead", 6.83, make_forehead_model(), {}};
+  Setup& s = c.setup;
+  s.effects.damping = true;
+  s.effects.muscles = true;
+  s.effects.sliding = true;
+  s.damping_alpha = 100;
+  s.duration = 1;
+  s.activation = {Curve::ramp(0.05, 0.05), Curve::ramp(0.05, 0.05)};
+  s.rigid_nodes = *node_set(c.model, "y_max");
+  return c;
+}
+
+Case soft_body() {
+  Case c{"15k multi-material body", 0.14, make_soft_body_model(), {}};
+  Setup& s = c.setup;
+  s.effects.damping = true;
+  s.effects.gravity = true;
+  s.damping_alpha = 20;
+  s.duration = 10;
+  s.rigid_nodes = *node_set(c.model, "feet");
+  return c;
+}
+
+double median(std::vector<float> v) {
+  std::sort(v.begin(), v.end());
+  return double(v[v.size() / 2]);
+}
+
+struct Timing {
+  double ms_per_step = 0, bytes_per_step = 0, dt = 0;
+};
+
+Timing time_gpu(const Case& c, const Setup& s, ForceAssembly assembly, int launches) try {
+  CudaOptions o;
+  o.assembly = assembly;
+  auto b = make_cuda_backend(c.model, s, o);
+  auto* t = dynamic_cast<CudaTiming*>(b.get());
+  t->timed_graph_launches(3);  // warm-up
+  const auto ms = t->timed_graph_launches(launches);
+  return {median(ms) / t->graph_steps(), t->bytes_per_step(), b->dt()};
+} catch (const std::exception& e) {
+  std::printf("  (failed: %s)\n", e.what());
+  return {};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // each figure visible as soon as measured
+  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  const int launches = quick ? 5 : 20;
+  if (!cuda_device_available()) {
+    std::printf("no CUDA device: nothing to measure\n");
+    return 0;
+  }
+  std::printf("device: %s\n", cuda_device_name().c_str());
+  const double copy_bw = measure_copy_bandwidth(std::size_t(1) << 30);
+  std::printf("device-to-device copy (1 GiB, read + write): %.0f GB/s\n", copy_bw / 1e9);
+  std::printf(
+      "timing: median of %d CUDA-graph launches (120 steps each) after 3 warm-up launches\n\n",
+      launches);
+
+  std::vector<Case> cases;
+  cases.push_back(forehead());
+  cases.push_back(skin_block());
+  cases.push_back(soft_body());
+
+  std::vector<std::string> summary;
+  for (const auto& c : cases) {
+    const double e = double(c.model.element_count()), n = double(c.model.node_count());
+    std::printf("== %s: %zu elements, %zu nodes, %zu sliding nodes\n", c.name.c_str(),
+                c.model.element_count(), c.model.node_count(),
+                c.setup.effects.sliding ? c.model.sliding.size() : std::size_t(0));
+    Timing base{};
+    for (Precision p : {Precision::float32, Precision::float64})
+      for (ForceAssembly a : {ForceAssembly::gather, ForceAssembly::atomic}) {
+        Setup s = c.setup;
+        s.precision = p;
+        const Timing t = time_gpu(c, s, a, launches);
+        if (p == Precision::float32 && a == ForceAssembly::gather) base = t;
+        const double bw = t.bytes_per_step / (t.ms_per_step * 1e-3);
+        std::printf(
+            "  %-6s %-6s %9.4f ms/step  %7.2f G element-steps/s  %6.0f GB/s (%4.1f%% of copy)\n",
+            p == Precision::float32 ? "float" : "double",
+            a == ForceAssembly::gather ? "gather" : "atomic", t.ms_per_step,
+            e / (t.ms_per_step * 1e-3) / 1e9, bw / 1e9, 100 * bw / copy_bw);
+      }
+    // Stage shares: leave one stage out (float, gather).
+    struct Variant {
+      const char* stage;
+      std::function<void(Setup&)> off;
+    };
+    std::vector<Variant> variants = {
+        {"hourglass", [](Setup& s) { s.effects.hourglass = false; }},
+    };
+    if (c.setup.effects.muscles)
+      variants.push_back({"muscles", [](Setup& s) { s.effects.muscles = false; }});
+    if (c.setup.effects.sliding)
+      variants.push_back({"sliding", [](Setup& s) { s.effects.sliding = false; }});
+    if (c.setup.effects.gravity)
+      variants.push_back({"gravity", [](Setup& s) { s.effects.gravity = false; }});
+    if (c.setup.effects.loads)
+      variants.push_back({"loads", [](Setup& s) { s.effects.loads = false; }});
+    for (const auto& v : variants) {
+      Setup s = c.setup;
+      s.precision = Precision::float32;
+      v.off(s);
+      const Timing t = time_gpu(c, s, ForceAssembly::gather, launches);
+      std::printf("  without %-58s %9.4f ms/step  share %5.1f%%\n", v.stage, t.ms_per_step,
+                  100 * (base.ms_per_step - t.ms_per_step) / base.ms_per_step);
+    }
+    // Per-stage device time (float, gather): events between the stages of single steps.
+    try {
+      Setup s = c.setup;
+      s.precision = Precision::float32;
+      auto b = make_cuda_backend(c.model, s);
+      auto* t = dynamic_cast<CudaTiming*>(b.get());
+      const auto stages = t->stage_times(quick ? 5 : 30);
+      double sum = 0;
+      for (const auto& st : stages) sum += st.second;
+      for (const auto& st : stages)
+        std::printf("  stage %-56s %9.4f ms  %5.1f%% of the stages' sum\n", st.first.c_str(),
+                    st.second, 100 * st.second / sum);
+    } catch (const std::exception& ex) {
+      std::printf("  stage timing failed: %s\n", ex.what());
+    }
+    // CPU backend, a few steps.
+    try {
+      Setup s = c.setup;
+      s.precision = Precision::float32;
+      auto cpu = make_cpu_backend(c.model, s);
+      cpu->step(1);
+      const int steps = e > 2e5 ? 3 : 20;
+      const auto t0 = std::chrono::steady_clock::now();
+      cpu->step(steps);
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
+          steps;
+      std::printf(
+          "  CPU backend (float, all cores): %.3f ms/step, %.1f M element-steps/s; GPU speed-up "
+          "%.0fx\n",
+          ms, e / (ms * 1e-3) / 1e6, ms / base.ms_per_step);
+    } catch (const std::exception& ex) {
+      std::printf("  CPU backend failed: %s\n", ex.what());
+    }
+    char line[512];
+    std::snprintf(line, sizeof line, "| %s | %.0f | %.0f | %.3g | %.2f | %.4f | %.0fx | %.2f |",
+                  c.name.c_str(), n, e, base.dt * 1e3, c.paper_ms, base.ms_per_step,
+                  c.paper_ms / base.ms_per_step, base.dt / (base.ms_per_step * 1e-3));
+    summary.push_back(line);
+    std::printf("\n");
+  }
+  std::printf(
+      "| model | nodes | elements | dt (ms) | paper ms/step (GTX 680) | ours ms/step (float, "
+      "gather) | ratio | simulated s per wall s |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (const auto& l : summary) std::printf("%s\n", l.c_str());
+  return 0;
+}
