@@ -1,8 +1,8 @@
 #pragma once
 // TLED neo-Hookean material (physics-notes §2; Miller et al. 2007; NiftySim):
-//   W = μ/2 (Ī1 − 3) + κ/2 (J − 1)²,   Ī1 = J^(−2/3) I1,  I1 = tr C        (J/m³ of reference
-//   volume) S = μ J^(−2/3) (I − (I1/3) C⁻¹) + κ J (J − 1) C⁻¹                      (Pa, 2nd
-//   Piola–Kirchhoff) μ = E / (2(1+ν)),  κ = E / (3(1−2ν)),  λ + 2μ = κ + 4μ/3.
+//   W = μ/2 (Ī1 − 3) + κ/2 (J − 1)²,  Ī1 = J^(−2/3) I1,  I1 = tr C   (J/m³ of reference volume)
+//   S = μ J^(−2/3) (I − (I1/3) C⁻¹) + κ J (J − 1) C⁻¹                (Pa, 2nd Piola–Kirchhoff)
+//   μ = E / (2(1+ν)),  κ = E / (3(1−2ν)),  λ + 2μ = κ + 4μ/3.
 // Not FEBio's "neo-Hookean" (μ/2(I1−3) − μ ln J + λ/2 (ln J)²).
 //
 // Multi-material elements: S = Σ_m w_m S_m(C). Because S is linear in (μ, κ), this equals S with
