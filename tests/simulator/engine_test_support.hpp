@@ -8,6 +8,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <ostream>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -29,6 +30,8 @@ struct NamedBackend {
   bool (*available)() = nullptr;
   const char* missing = "";
 };
+// GoogleTest prints a parameter with this (the backend's name) instead of its raw bytes.
+inline void PrintTo(const NamedBackend& b, std::ostream* os) { *os << b.name; }
 inline bool backend_missing(const NamedBackend& b) {
   return b.available != nullptr && !b.available();
 }
