@@ -81,12 +81,15 @@ formats::Model make_forehead_model(int nx, int ny, int nz, double h) {
     normals.push_back(
         physics::triangle_normal(v[std::size_t(t[0])], v[std::size_t(t[1])], v[std::size_t(t[2])]));
   const SurfaceGrid grid = build_surface_grid(skull.vertices, tris);
+  const SurfaceLists<double> lists = make_surface_lists(grid, v, tris);
   SurfaceView<double> view{v.data(),
                            tris.data(),
                            normals.data(),
                            std::int32_t(tris.size()),
                            grid.cell_offsets.data(),
                            grid.cell_triangles.data(),
+                           lists.corners.data(),
+                           lists.cell.data(),
                            {},
                            0,
                            {}};

@@ -421,6 +421,7 @@ struct DeviceSurface {
   DeviceArray<Vec3<T>> vertices, normals;
   DeviceArray<std::array<std::int32_t, 3>> triangles;
   DeviceArray<std::int32_t> cell_offsets, cell_triangles;
+  DeviceArray<Vec3<T>> entry_corners, cell_boxes;
 };
 
 template <typename T>
@@ -700,6 +701,9 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
       ds->triangles.upload(s.triangles);
       ds->cell_offsets.upload(s.grid.cell_offsets);
       ds->cell_triangles.upload(s.grid.cell_triangles);
+      const SurfaceLists<T> lists = make_surface_lists(s.grid, v, s.triangles);
+      ds->entry_corners.upload(lists.corners);
+      ds->cell_boxes.upload(lists.cell);
       SurfaceView<T> view;
       view.vertices = ds->vertices.get();
       view.triangles = ds->triangles.get();
@@ -707,6 +711,8 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
       view.triangle_count = std::int32_t(s.triangles.size());
       view.cell_offsets = ds->cell_offsets.get();
       view.cell_triangles = ds->cell_triangles.get();
+      view.entry_corners = ds->entry_corners.get();
+      view.cell_boxes = ds->cell_boxes.get();
       for (int k = 0; k < 3; ++k) {
         view.origin[k] = T(s.grid.origin[std::size_t(k)]);
         view.dims[k] = s.grid.dims[std::size_t(k)];

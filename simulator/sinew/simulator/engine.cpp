@@ -83,6 +83,7 @@ struct Surface {
   std::vector<std::array<std::int32_t, 3>> triangles;
   std::vector<Vec3<T>> normals;
   SurfaceGrid grid;
+  SurfaceLists<T> lists;  // make_surface_lists(grid, vertices, triangles)
   SurfaceView<T> view() const {
     SurfaceView<T> v;
     v.vertices = vertices.data();
@@ -91,6 +92,8 @@ struct Surface {
     v.triangle_count = static_cast<std::int32_t>(triangles.size());
     v.cell_offsets = grid.cell_offsets.data();
     v.cell_triangles = grid.cell_triangles.data();
+    v.entry_corners = lists.corners.data();
+    v.cell_boxes = lists.cell.data();
     for (int k = 0; k < 3; ++k) {
       v.origin[k] = T(grid.origin[std::size_t(k)]);
       v.dims[k] = grid.dims[std::size_t(k)];
@@ -294,6 +297,7 @@ CpuEngine<T>::CpuEngine(const formats::Model& model, const Setup& setup, Plan pl
                                                       surf.vertices[std::size_t(t[1])],
                                                       surf.vertices[std::size_t(t[2])]));
     surf.grid = std::move(ps.grid);
+    surf.lists = make_surface_lists(surf.grid, surf.vertices, surf.triangles);
     surfaces_.push_back(std::move(surf));
   }
   slide_node_ = std::move(p.slide_node);
