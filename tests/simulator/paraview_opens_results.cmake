@@ -1,0 +1,34 @@
+# ParaView opens the simulator's results (ctest: simulator_paraview_opens_results). Runs the
+# box_compression scene on a generated 8 × 8 × 8 block and reads results.xdmf with pvpython's XDMF
+# reader (paraview_check.py). Skipped when pvpython is not installed (the test's
+# SKIP_REGULAR_EXPRESSION matches the message below): Debian's `paraview` package provides it;
+# scripts/install-deps does not install it (it is large).
+# Inputs: -DSIMULATE=... -DGENERATE=... -DSCENES=<data/scenes> -DCHECK=<paraview_check.py>
+#         -DWORK=<dir> -DPVPYTHON=<pvpython or PVPYTHON-NOTFOUND>
+cmake_minimum_required(VERSION 3.20)
+if(NOT PVPYTHON)
+  message("pvpython not found: skipped (apt-get install paraview to run this test)")
+  return()
+endif()
+file(REMOVE_RECURSE "${WORK}")
+file(MAKE_DIRECTORY "${WORK}")
+file(COPY "${SCENES}/box_compression.yaml" DESTINATION "${WORK}")
+execute_process(COMMAND "${GENERATE}" box --dims 8 8 8 --voxel-size 0.0025
+                        --material soft:3000:0.45:1000 -o "${WORK}/compression_block.h5" -q
+                RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "FAILED: sinew-generate box exited ${rc}")
+endif()
+execute_process(COMMAND "${SIMULATE}" "${WORK}/box_compression.yaml" -o "${WORK}/out" --quiet
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "FAILED: sinew-simulate exited ${rc}: ${err}")
+endif()
+# 31 frames (t = 0, 0.02, ..., 0.6), 9³ nodes, 8³ hexahedra.
+execute_process(COMMAND "${PVPYTHON}" --force-offscreen-rendering "${CHECK}"
+                        "${WORK}/out/results.xdmf" 31 729 512
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("${out}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "FAILED: pvpython exited ${rc}: ${out} ${err}")
+endif()
