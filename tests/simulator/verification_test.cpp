@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <random>
 
 #include "engine_test_support.hpp"
@@ -354,6 +355,9 @@ TEST_P(Verification, InvertedElementIsDetectedAndReported) {
 struct MuscleCase {
   double stretch, activation, p1;
 };
+void PrintTo(const MuscleCase& c, std::ostream* os) {
+  *os << "stretch " << c.stretch << ", activation " << c.activation << ", p1 " << c.p1;
+}
 class IsometricMuscle : public BackendTest<std::tuple<NamedBackend, MuscleCase>> {};
 
 TEST_P(IsometricMuscle, EndForceIsReferenceStressTimesCurvesTimesArea) {
