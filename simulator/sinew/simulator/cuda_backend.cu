@@ -31,6 +31,19 @@ namespace {
 
 constexpr int kBlock = 256;
 
+// Sum of `value` over the kBlock threads of a block: a tree reduction in the shared array `s`
+// (kBlock doubles) in a fixed order, so the sum is the same bits every run. Valid in every thread
+// after the call; `tid` is the caller's threadIdx.x (only kernel entry points read it).
+__device__ __forceinline__ double block_sum(double value, double* s, int tid) {
+  s[tid] = value;
+  __syncthreads();
+  for (int stride = kBlock / 2; stride > 0; stride /= 2) {
+    if (tid < stride) s[tid] += s[tid + stride];
+    __syncthreads();
+  }
+  return s[0];
+}
+
 // printf-style formatting for messages (fmt's compile-time format strings do not pass nvcc).
 template <typename... A>
 std::string format(const char* f, A... a) {
@@ -294,13 +307,8 @@ __global__ void __launch_bounds__(kBlock)
     const double vz = (double(u[i].z) - double(up[i].z)) * inv_dt;
     e = 0.5 / double(inverse_mass[i]) * (vx * vx + vy * vy + vz * vz);
   }
-  s[threadIdx.x] = e;
-  __syncthreads();
-  for (int stride = kBlock / 2; stride > 0; stride /= 2) {
-    if (int(threadIdx.x) < stride) s[threadIdx.x] += s[threadIdx.x + stride];
-    __syncthreads();
-  }
-  if (threadIdx.x == 0) partial[blockIdx.x] = s[0];
+  const double sum = block_sum(e, s, int(threadIdx.x));
+  if (threadIdx.x == 0) partial[blockIdx.x] = sum;
 }
 
 __global__ void __launch_bounds__(kBlock)
@@ -309,14 +317,9 @@ __global__ void __launch_bounds__(kBlock)
   __shared__ double s[kBlock];
   double w = 0;
   for (int k = int(threadIdx.x); k < count; k += kBlock) w += partial[k];
-  s[threadIdx.x] = w;
-  __syncthreads();
-  for (int stride = kBlock / 2; stride > 0; stride /= 2) {
-    if (int(threadIdx.x) < stride) s[threadIdx.x] += s[threadIdx.x + stride];
-    __syncthreads();
-  }
+  const double sum = block_sum(w, s, int(threadIdx.x));
   if (threadIdx.x == 0) {
-    const double ke = s[0];
+    const double ke = sum;
     if (!isfinite(ke) || ke > bound->factor * (bound->base + fabs(*work))) status->blowup = 1;
   }
 }
@@ -377,13 +380,8 @@ __global__ void __launch_bounds__(kBlock)
       w += fc * 0.5 * (double(un[i][c]) - double(up[i][c]));
     }
   }
-  s[threadIdx.x] = w;
-  __syncthreads();
-  for (int stride = kBlock / 2; stride > 0; stride /= 2) {
-    if (int(threadIdx.x) < stride) s[threadIdx.x] += s[threadIdx.x + stride];
-    __syncthreads();
-  }
-  if (threadIdx.x == 0) partial[blockIdx.x] = s[0];
+  const double sum = block_sum(w, s, int(threadIdx.x));
+  if (threadIdx.x == 0) partial[blockIdx.x] = sum;
 }
 
 __global__ void __launch_bounds__(kBlock)
@@ -391,13 +389,8 @@ __global__ void __launch_bounds__(kBlock)
   __shared__ double s[kBlock];
   double w = 0;
   for (int k = int(threadIdx.x); k < count; k += kBlock) w += partial[k];
-  s[threadIdx.x] = w;
-  __syncthreads();
-  for (int stride = kBlock / 2; stride > 0; stride /= 2) {
-    if (int(threadIdx.x) < stride) s[threadIdx.x] += s[threadIdx.x + stride];
-    __syncthreads();
-  }
-  if (threadIdx.x == 0) *total += s[0];
+  const double sum = block_sum(w, s, int(threadIdx.x));
+  if (threadIdx.x == 0) *total += sum;
 }
 
 // ---------------------------------------------------------------------------------------------
