@@ -27,6 +27,7 @@
 #include "sinew/simulator/export/results_reader.hpp"
 #include "sinew/simulator/hdf5_io.hpp"
 #include "sinew/simulator/results_writer.hpp"
+#include "test_meshes.hpp"
 
 namespace {
 
@@ -39,48 +40,14 @@ struct Mesh {
   std::vector<std::int32_t> triangles;
 };
 
-// Icosphere: an icosahedron subdivided `levels` times, vertices projected onto the sphere;
-// triangles counter-clockwise seen from outside.
+// Icosphere (test_meshes.hpp) as a float mesh.
 Mesh icosphere(int levels, double radius, std::array<double, 3> c = {0, 0, 0}) {
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<std::array<double, 3>> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
-                                          {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
-                                          {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                                       {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-  auto unit = [](std::array<double, 3> p) {
-    const double n = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-    return std::array<double, 3>{p[0] / n, p[1] / n, p[2] / n};
-  };
-  for (auto& p : v) p = unit(p);
-  for (int l = 0; l < levels; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto middle = [&](int a, int b) {
-      const auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      v.push_back(
-          unit({(v[a][0] + v[b][0]) / 2, (v[a][1] + v[b][1]) / 2, (v[a][2] + v[b][2]) / 2}));
-      mid[key] = static_cast<int>(v.size()) - 1;
-      return mid[key];
-    };
-    std::vector<std::array<int, 3>> g;
-    for (const auto& tri : f) {
-      const int a = middle(tri[0], tri[1]), b = middle(tri[1], tri[2]), cc = middle(tri[2], tri[0]);
-      g.push_back({tri[0], a, cc});
-      g.push_back({tri[1], b, a});
-      g.push_back({tri[2], cc, b});
-      g.push_back({a, b, cc});
-    }
-    f = g;
-  }
+  const auto soup = sinew::simulator::testing::make_icosphere(levels, radius, c);
   Mesh m;
-  for (const auto& p : v) {
-    for (int k = 0; k < 3; ++k) m.positions.push_back(static_cast<float>(c[k] + radius * p[k]));
-  }
-  for (const auto& tri : f) m.triangles.insert(m.triangles.end(), tri.begin(), tri.end());
+  for (const auto& p : soup.vertices)
+    for (int k = 0; k < 3; ++k) m.positions.push_back(static_cast<float>(p[std::size_t(k)]));
+  for (const auto& tri : soup.triangles)
+    m.triangles.insert(m.triangles.end(), tri.begin(), tri.end());
   return m;
 }
 
