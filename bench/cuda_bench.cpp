@@ -2,7 +2,9 @@
 // ms per step (CUDA events around graph launches, warm-up, median), element-steps per second,
 // achieved bandwidth against a measured device-to-device copy, stage shares from variants that
 // leave one stage out, float/double, gather/atomic, and the CPU backend on the same machine. Usage:
-// cuda_bench [--quick] (quick: fewer launches, for checking the program).
+// cuda_bench [--quick] [--only NAME] [--profile]. quick: fewer launches, for checking the program;
+// only: the models whose name contains NAME; profile: float gather only, 3 launches after one
+// warm-up, nothing else (for ncu).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -84,8 +86,8 @@ struct Timing {
   double ms_per_step = 0, bytes_per_step = 0, dt = 0;
 };
 
-Timing time_gpu(const Case& c, const Setup& s, ForceAssembly assembly, int launches) try {
-  CudaOptions o;
+Timing time_gpu(const Case& c, const Setup& s, ForceAssembly assembly, int launches,
+                CudaOptions o = {}) try {
   o.assembly = assembly;
   auto b = make_cuda_backend(c.model, s, o);
   auto* t = dynamic_cast<CudaTiming*>(b.get());
@@ -101,8 +103,21 @@ Timing time_gpu(const Case& c, const Setup& s, ForceAssembly assembly, int launc
 
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // each figure visible as soon as measured
-  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
-  const int launches = quick ? 5 : 20;
+  bool quick = false, profile = false;
+  std::string only;
+  for (int k = 1; k < argc; ++k) {
+    if (std::strcmp(argv[k], "--quick") == 0) {
+      quick = true;
+    } else if (std::strcmp(argv[k], "--profile") == 0) {
+      profile = true;
+    } else if (std::strcmp(argv[k], "--only") == 0 && k + 1 < argc) {
+      only = argv[++k];
+    } else {
+      std::printf("usage: cuda_bench [--quick] [--only NAME] [--profile]\n");
+      return 2;
+    }
+  }
+  const int launches = profile ? 3 : quick ? 5 : 20;
   if (!cuda_device_available()) {
     std::printf("no CUDA device: nothing to measure\n");
     return 0;
@@ -115,9 +130,10 @@ int main(int argc, char** argv) {
       launches);
 
   std::vector<Case> cases;
-  cases.push_back(forehead());
-  cases.push_back(skin_block());
-  cases.push_back(soft_body());
+  for (auto make : {forehead, skin_block, soft_body}) {
+    Case c = make();
+    if (c.name.find(only) != std::string::npos) cases.push_back(std::move(c));
+  }
 
   std::vector<std::string> summary;
   for (const auto& c : cases) {
@@ -128,6 +144,7 @@ int main(int argc, char** argv) {
     Timing base{};
     for (Precision p : {Precision::float32, Precision::float64})
       for (ForceAssembly a : {ForceAssembly::gather, ForceAssembly::atomic}) {
+        if (profile && (p != Precision::float32 || a != ForceAssembly::gather)) continue;
         Setup s = c.setup;
         s.precision = p;
         const Timing t = time_gpu(c, s, a, launches);
@@ -139,6 +156,7 @@ int main(int argc, char** argv) {
             a == ForceAssembly::gather ? "gather" : "atomic", t.ms_per_step,
             e / (t.ms_per_step * 1e-3) / 1e9, bw / 1e9, 100 * bw / copy_bw);
       }
+    if (profile) continue;
     // Stage shares: leave one stage out (float, gather).
     struct Variant {
       const char* stage;
@@ -155,6 +173,16 @@ int main(int argc, char** argv) {
       variants.push_back({"gravity", [](Setup& s) { s.effects.gravity = false; }});
     if (c.setup.effects.loads)
       variants.push_back({"loads", [](Setup& s) { s.effects.loads = false; }});
+    if (c.setup.effects.sliding)
+      for (double skin : {0.02, 0.1, 0.25}) {  // the default, 0.05, is `base`
+        CudaOptions o;
+        o.sliding_skin = skin;
+        Setup s = c.setup;
+        s.precision = Precision::float32;
+        const Timing t = time_gpu(c, s, ForceAssembly::gather, launches, o);
+        std::printf("  sliding skin %.2f cells (default 0.05)%28s %9.4f ms/step\n", skin, "",
+                    t.ms_per_step);
+      }
     for (const auto& v : variants) {
       Setup s = c.setup;
       s.precision = Precision::float32;

@@ -107,6 +107,31 @@ TEST(CudaBackend, GatherAssemblyIsBitReproducibleFromRunToRun) {
   EXPECT_LT(measure, 1e-3);
 }
 
+// The sliding candidate lists are exact for any skin: a skin so small that nodes leave their lists
+// every step (misses, batch replays, then inline refresh), the default, and a skin so large that
+// lists overflow (full searches) give the same bits.
+TEST(CudaBackend, SlidingListsGiveTheSameResultsForAnySkin) {
+  SKIP_WITHOUT_GPU();
+  const Scene s = muscle_sliding_scene(Precision::float32);
+  std::vector<double> first;
+  std::vector<std::int32_t> first_triangles;
+  for (double skin : {0.05, 1e-6, 3.0}) {
+    CudaOptions o;
+    o.sliding_skin = skin;
+    auto gpu = make_cuda_backend(s.model, s.setup, o);
+    gpu->step(600);
+    const auto u = gpu->displacements();
+    const auto tri = gpu->state().sliding_triangle;
+    if (first.empty()) {
+      first = u;
+      first_triangles = tri;
+      continue;
+    }
+    EXPECT_EQ(0, std::memcmp(first.data(), u.data(), u.size() * sizeof(double))) << "skin " << skin;
+    EXPECT_EQ(first_triangles, tri) << "skin " << skin;
+  }
+}
+
 TEST(CudaBackend, RestoredRunContinuesBitIdentically) {
   SKIP_WITHOUT_GPU();
   const Scene s = muscle_sliding_scene(Precision::float32);
@@ -144,6 +169,29 @@ TEST(CudaBackend, InstabilityIsDetectedWithTheStateAtTheLastGoodStep) {
   std::printf("[ measured ] %s\n", message.c_str());
   EXPECT_NE(message.find("at step"), std::string::npos);
   for (double v : gpu->displacements()) ASSERT_TRUE(std::isfinite(v)) << "state not at a good step";
+}
+
+// The same with muscles and sliding (the accuracy study's forehead at 0.9 h/c once ended in an
+// illegal memory access instead): a diverging run with sliding nodes must stop with the
+// instability message, whatever the precision, and keep the last good state.
+TEST(CudaBackend, UnstableSlidingRunStopsCleanly) {
+  SKIP_WITHOUT_GPU();
+  for (const Precision p : {Precision::float32, Precision::float64}) {
+    Scene sc = muscle_sliding_scene(p);
+    const Plan probe = make_plan(sc.model, sc.setup);
+    sc.setup.time_step.policy = TimeStepPolicy::forced;
+    sc.setup.time_step.user_dt = 1.5 * probe.dt_critical;
+    auto gpu = make_cuda_backend(sc.model, sc.setup);
+    std::string message;
+    try {
+      gpu->step(200000);
+    } catch (const InstabilityError& e) {
+      message = e.what();
+    }
+    ASSERT_FALSE(message.empty()) << "no instability detected";
+    std::printf("[ measured ] %s\n", message.c_str());
+    for (double v : gpu->displacements()) ASSERT_TRUE(std::isfinite(v));
+  }
 }
 
 TEST(CudaBackend, InternalForcesAndReactionsMatchTheCpu) {

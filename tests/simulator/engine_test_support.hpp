@@ -15,6 +15,7 @@
 
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model.hpp"
+#include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/engine.hpp"
 #include "sinew/simulator/setup.hpp"
 
@@ -31,7 +32,9 @@ struct NamedBackend {
   const char* missing = "";
 };
 // GoogleTest prints a parameter with this (the backend's name) instead of its raw bytes.
-inline void PrintTo(const NamedBackend& b, std::ostream* os) { *os << b.name; }
+inline void PrintTo(const NamedBackend& b, std::ostream* os) {
+  *os << b.name;
+}
 inline bool backend_missing(const NamedBackend& b) {
   return b.available != nullptr && !b.available();
 }
@@ -54,6 +57,19 @@ class BackendTest : public ::testing::TestWithParam<Param> {
 };
 inline std::string backend_name(const ::testing::TestParamInfo<NamedBackend>& info) {
   return info.param.name;
+}
+
+// Every backend built here: the CPU, and the CUDA backend where it is compiled (its cases skip with
+// "no CUDA device" where there is none, e.g. in CI, so they show as skipped).
+inline const std::vector<NamedBackend>& every_backend() {
+  static const std::vector<NamedBackend> backends = {
+      {"cpu", &make_cpu_backend, nullptr, ""},
+#ifdef SINEW_CUDA_ENABLED
+      {"cuda", [](const formats::Model& m, const Setup& s) { return make_cuda_backend(m, s); },
+       &cuda_device_available, "no CUDA device"},
+#endif
+  };
+  return backends;
 }
 
 // A TLED neo-Hookean material from μ and ν.

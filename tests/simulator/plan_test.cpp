@@ -98,6 +98,19 @@ TEST(Plan, TimeStepRuleAndRefusal) {
   const Plan forced = make_plan(model, s);
   EXPECT_EQ(forced.dt, 0.6 * crit);
   EXPECT_FALSE(forced.warnings.empty());
+  // An automatic step above 0.8 h/c (one-point cubes are stable to ≈ 0.85 at ν = 0.49) is run
+  // with a warning; 0.8 itself is quiet.
+  s.time_step.policy = TimeStepPolicy::automatic;
+  const auto courant_warnings = [&](double safety) {
+    s.time_step.safety_factor = safety;
+    int n = 0;
+    for (const auto& w : make_plan(model, s).warnings)
+      n += w.find("can go unstable") != std::string::npos;
+    return n;
+  };
+  EXPECT_EQ(courant_warnings(0.8), 0);
+  EXPECT_EQ(courant_warnings(0.9), 1);
+  s.time_step.safety_factor = 0.5;
   // Muscles stiffen the estimate by σref (a_max · 3.6 + fp'(x*)).
   s.time_step.policy = TimeStepPolicy::automatic;
   s.effects.muscles = true;

@@ -348,6 +348,36 @@ TEST(Runner, TimeScalingKeepsOutputsInSceneTime) {
   EXPECT_EQ(r.summary.energies.back().time, t.back());
 }
 
+// Compression to 30% of height with the default `shear` hourglass modulus folds the one-point
+// elements into hourglass patterns that keep every centre J > 0 (docs/stability.md, limit 2): the
+// run must say so (hourglass energy over 10% of the strain energy), while a mild compression must
+// not warn.
+TEST(Runner, HourglassDominatedRunIsFlagged) {
+  for (const double squash : {0.1, 0.75}) {
+    TempDir dir("hourglass_warning");
+    write_model(dir);
+    write_file(dir / "scene.yaml",
+               fmt::format("model: block.h5\neffects: [elasticity, hourglass, damping, loads]\n"
+                           "duration: 0.6\ndamping: 40\ntime_step: {{mode: auto, safety_factor: "
+                           "0.2}}\nnode_sets:\n  lid: {{plane: {{point: [0, 0, 0.04], normal: "
+                           "[0, 0, 1]}}}}\nboundary_conditions:\n  - {{type: fixed, set: z_min}}\n"
+                           "  - {{type: displacement, set: lid, components: [z], value: [0, 0, "
+                           "{}], curve: {{ramp: 0.5}}}}\noutput: {{interval: 0.02}}\n",
+                           -0.04 * squash));
+    const auto r = run_scene(options_for(dir / "scene.yaml", dir / "out"));
+    ASSERT_EQ(r.summary.status, "completed") << squash;
+    bool warned = false;
+    for (const auto& w : r.summary.warnings)
+      warned = warned || w.find("hourglass energy is") != std::string::npos;
+    double worst = 0;
+    for (const auto& e : r.summary.energies)
+      if (e.strain > 0) worst = std::max(worst, e.hourglass / e.strain);
+    EXPECT_EQ(warned, worst > kHourglassWarningShare) << squash << ": worst share " << worst;
+    EXPECT_EQ(warned, squash > 0.5) << squash << ": worst share " << worst;
+    RecordProperty(fmt::format("worst_share_{}", squash), fmt::format("{:.3f}", worst));
+  }
+}
+
 TEST(Runner, MissingModelNamesTheFile) {
   TempDir dir("nomodel");
   write_file(dir / "scene.yaml", "model: nowhere.h5\neffects: [elasticity]\nduration: 1\n");

@@ -19,14 +19,7 @@ namespace sinew::simulator::testing {
 using SimSetup = sinew::simulator::Setup;
 namespace {
 
-// CUDA cases skip with "no CUDA device" where there is none (CI), so they show as skipped.
-const NamedBackend kBackends[] = {
-    {"cpu", &make_cpu_backend, nullptr, ""},
-#ifdef SINEW_CUDA_ENABLED
-    {"cuda", [](const formats::Model& m, const SimSetup& s) { return make_cuda_backend(m, s); },
-     &cuda_device_available, "no CUDA device"},
-#endif
-};
+const std::vector<NamedBackend>& kBackends = every_backend();
 
 class Verification : public BackendTest<NamedBackend> {
  protected:

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <set>
 #include <tuple>
 #include <vector>
 
+#include "sinew/common/error.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/simulator/sliding_grid.hpp"
 
@@ -117,16 +119,17 @@ formats::Model make_forehead_model(int nx, int ny, int nz, double h) {
   return model;
 }
 
-formats::Model make_soft_body_model(double s, double h) {
-  struct Ellipsoid {
-    std::array<double, 3> c, r;
-  };
-  std::vector<Ellipsoid> parts = {{{0, 0, 0}, {19, 11, 9}},      {{8, -13, 2}, {10, 2.4, 2.4}},
-                                  {{8, 13, 2}, {10, 2.4, 2.4}},  {{24, 0, 6}, {7, 7, 7}},
-                                  {{-30, 0, 0}, {14, 2.5, 2.5}}, {{26, -4, 15}, {2, 2, 6}},
-                                  {{26, 4, 15}, {2, 2, 6}}};
-  for (int sxn : {-1, 1})
-    for (int syn : {-1, 1}) parts.push_back({{12.0 * sxn, 8.0 * syn, -17}, {2.6, 2.6, 13}});
+namespace {
+
+struct Ellipsoid {
+  std::array<double, 3> c, r;
+};
+
+// The body of make_soft_body_model: cells (voxel side h) whose centres lie in any of the
+// ellipsoids (reference units, times s), and, when floor is finite, above the plane z = floor · s;
+// with largest_only, only the largest face-connected piece is kept.
+formats::Model soft_body_from_parts(std::vector<Ellipsoid> parts, double s, double h, double floor,
+                                    bool largest_only, const char* tool) {
   for (auto& p : parts)
     for (int k = 0; k < 3; ++k) {
       p.c[std::size_t(k)] *= s;
@@ -139,8 +142,30 @@ formats::Model make_soft_body_model(double s, double h) {
         for (int k = int(p.c[2] - p.r[2]) - 1; k < int(p.c[2] + p.r[2]) + 2; ++k) {
           const double a = (i + 0.5 - p.c[0]) / p.r[0], b = (j + 0.5 - p.c[1]) / p.r[1],
                        c = (k + 0.5 - p.c[2]) / p.r[2];
-          if (a * a + b * b + c * c <= 1) cells.insert({k, j, i});
+          if (a * a + b * b + c * c <= 1 && k + 0.5 >= floor * s) cells.insert({k, j, i});
         }
+  }
+  if (largest_only && !cells.empty()) {
+    std::set<std::tuple<int, int, int>> best, seen;
+    for (const auto& start : cells) {
+      if (seen.count(start)) continue;
+      std::set<std::tuple<int, int, int>> piece{start};
+      std::vector<std::tuple<int, int, int>> stack{start};
+      seen.insert(start);
+      while (!stack.empty()) {
+        const auto [k, j, i] = stack.back();
+        stack.pop_back();
+        const std::tuple<int, int, int> next[6] = {{k - 1, j, i}, {k + 1, j, i}, {k, j - 1, i},
+                                                   {k, j + 1, i}, {k, j, i - 1}, {k, j, i + 1}};
+        for (const auto& n : next)
+          if (cells.count(n) && seen.insert(n).second) {
+            piece.insert(n);
+            stack.push_back(n);
+          }
+      }
+      if (piece.size() > best.size()) best = std::move(piece);
+    }
+    cells = std::move(best);
   }
   int lo[3] = {1 << 30, 1 << 30, 1 << 30}, hi[3] = {-(1 << 30), -(1 << 30), -(1 << 30)};
   for (const auto& [k, j, i] : cells) {
@@ -175,9 +200,143 @@ formats::Model make_soft_body_model(double s, double h) {
   for (std::size_t n = 0; n < m.node_count(); ++n)
     if (m.node_lattice[n][2] == 0) feet.ids.push_back(Index(n));
   m.node_sets.push_back(feet);
-  m.provenance.tool = "sinew::simulator::make_soft_body_model";
+  m.provenance.tool = tool;
   m.provenance.created = "2026-01-01T00:00:00Z";
   return m;
+}
+
+}  // namespace
+
+formats::Model make_soft_body_model(double s, double h) {
+  std::vector<Ellipsoid> parts = {{{0, 0, 0}, {19, 11, 9}},      {{8, -13, 2}, {10, 2.4, 2.4}},
+                                  {{8, 13, 2}, {10, 2.4, 2.4}},  {{24, 0, 6}, {7, 7, 7}},
+                                  {{-30, 0, 0}, {14, 2.5, 2.5}}, {{26, -4, 15}, {2, 2, 6}},
+                                  {{26, 4, 15}, {2, 2, 6}}};
+  for (int sxn : {-1, 1})
+    for (int syn : {-1, 1}) parts.push_back({{12.0 * sxn, 8.0 * syn, -17}, {2.6, 2.6, 13}});
+  return soft_body_from_parts(std::move(parts), s, h, -HUGE_VAL, false,
+                              "sinew::simulator::make_soft_body_model");
+}
+
+// ---- Sample models -------------------------------------------------------------------------------
+
+void add_boundary_visual_surface(formats::Model& model, const std::string& name,
+                                 const std::string& skip_set) {
+  for (const auto& surface : model.surfaces)
+    if (surface.name == name)
+      throw ConfigError("", "surface", "the model already has a surface named '" + name + "'");
+  std::vector<char> skip(model.node_count(), 0);
+  if (!skip_set.empty()) {
+    const formats::NamedSet* set = nullptr;
+    for (const auto& s : model.node_sets)
+      if (s.name == skip_set) set = &s;
+    if (set == nullptr)
+      throw ConfigError("", "skip_set", "the model has no node set '" + skip_set + "'");
+    for (const Index n : set->ids) skip[std::size_t(n)] = 1;
+  }
+  const auto& dims = model.grid.dims;
+  const std::size_t nx = std::size_t(dims[0]), ny = std::size_t(dims[1]), nz = std::size_t(dims[2]);
+  std::vector<Index> element_at(nx * ny * nz, -1);
+  auto cell = [&](const formats::Lattice& l) {
+    return std::size_t(l[0]) + nx * (std::size_t(l[1]) + ny * std::size_t(l[2]));
+  };
+  for (std::size_t e = 0; e < model.element_count(); ++e)
+    element_at[cell(model.element_lattice[e])] = Index(e);
+
+  // Faces as hex8 corners, counter-clockwise seen from outside (VTK order), with their neighbour.
+  struct Face {
+    int axis, side;
+    std::array<int, 4> corners;
+  };
+  constexpr std::array<Face, 6> kFaces = {{{0, -1, {0, 4, 7, 3}},
+                                           {0, +1, {1, 2, 6, 5}},
+                                           {1, -1, {0, 1, 5, 4}},
+                                           {1, +1, {3, 7, 6, 2}},
+                                           {2, -1, {0, 3, 2, 1}},
+                                           {2, +1, {4, 5, 6, 7}}}};
+  formats::Surface surface;
+  surface.name = name;
+  surface.role = formats::SurfaceRole::visual;
+  std::vector<Index> vertex_of(model.node_count(), -1);
+  for (std::size_t e = 0; e < model.element_count(); ++e) {
+    const auto& base = model.element_lattice[e];
+    for (const Face& face : kFaces) {
+      formats::Lattice n = base;
+      n[std::size_t(face.axis)] += face.side;
+      const int dim = dims[std::size_t(face.axis)];
+      const int c = n[std::size_t(face.axis)];
+      if (c >= 0 && c < dim && element_at[cell(n)] >= 0) continue;  // interior face
+      std::array<Index, 4> v{};
+      int skipped = 0;
+      for (int a = 0; a < 4; ++a) {
+        const int corner = face.corners[std::size_t(a)];
+        const Index node = model.element_nodes[e][std::size_t(corner)];
+        skipped += skip[std::size_t(node)];
+        v[std::size_t(a)] = node;
+      }
+      if (skipped == 4) continue;
+      for (int a = 0; a < 4; ++a) {
+        const int corner = face.corners[std::size_t(a)];
+        const Index node = v[std::size_t(a)];
+        Index& id = vertex_of[std::size_t(node)];
+        if (id < 0) {
+          id = Index(surface.vertices.size());
+          surface.vertices.push_back(model.node_position(node));
+          surface.embedding_element.push_back(Index(e));
+          const auto& k = formats::kHexCorner[std::size_t(corner)];
+          surface.embedding_local.push_back({2.0 * k[0] - 1.0, 2.0 * k[1] - 1.0, 2.0 * k[2] - 1.0});
+        }
+        v[std::size_t(a)] = id;
+      }
+      surface.triangles.push_back({v[0], v[1], v[2]});
+      surface.triangles.push_back({v[0], v[2], v[3]});
+    }
+  }
+  model.surfaces.push_back(std::move(surface));
+}
+
+formats::Model make_skin_block_sample_model(int nx, int ny, int nz, double h, int press_width) {
+  formats::Model model = make_skin_block_model(nx, ny, nz, h);
+  add_boundary_visual_surface(model, "skin", "z_min");
+  const int w = press_width > 0 ? press_width : std::max(1, int(std::lround(nx / 10.0)));
+  // Twice the lattice coordinate, so odd and even sizes centre alike: |2i − nx| ≤ w.
+  formats::NamedSet press{"press", {}};
+  for (std::size_t n = 0; n < model.node_count(); ++n) {
+    const auto& l = model.node_lattice[n];
+    if (l[2] == nz && std::abs(2 * l[0] - nx) <= w && std::abs(2 * l[1] - ny) <= w)
+      press.ids.push_back(Index(n));
+  }
+  model.node_sets.push_back(std::move(press));
+  return model;
+}
+
+formats::Model make_soft_body_sample_model(double scale, double h) {
+  // make_soft_body_model's legs end below the body's belly (they meet it along edges only: a
+  // mechanism under gravity), so here they reach up into it, stand further in, and end on flat
+  // pads cut by the floor z = −28; the arms move 1 in so they overlap the body along their length.
+  std::vector<Ellipsoid> parts = {{{0, 0, 0}, {19, 11, 9}},      {{8, -12, 2}, {10, 2.4, 2.4}},
+                                  {{8, 12, 2}, {10, 2.4, 2.4}},  {{24, 0, 6}, {7, 7, 7}},
+                                  {{-30, 0, 0}, {14, 2.5, 2.5}}, {{26, -4, 15}, {2, 2, 6}},
+                                  {{26, 4, 15}, {2, 2, 6}}};
+  for (int sxn : {-1, 1})
+    for (int syn : {-1, 1}) {
+      parts.push_back({{10.0 * sxn, 6.0 * syn, -12}, {3.2, 3.2, 17}});
+      parts.push_back({{10.0 * sxn + 1.5, 6.0 * syn, -28}, {4.5, 3.2, 3}});
+    }
+  formats::Model model = soft_body_from_parts(std::move(parts), scale, h, -28, true,
+                                              "sinew::simulator::make_soft_body_sample_model");
+  add_boundary_visual_surface(model, "skin");
+  return model;
+}
+
+double model_mass(const formats::Model& model) {
+  const double volume = model.grid.voxel_size * model.grid.voxel_size * model.grid.voxel_size;
+  double mass = 0;
+  for (std::size_t e = 0; e < model.element_count(); ++e)
+    for (auto k = model.material_offsets[e]; k < model.material_offsets[e + 1]; ++k)
+      mass += model.material_fractions[std::size_t(k)] *
+              model.materials[std::size_t(model.material_ids[std::size_t(k)])].density * volume;
+  return mass;
 }
 
 }  // namespace sinew::simulator

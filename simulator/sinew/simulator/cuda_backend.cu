@@ -41,7 +41,34 @@ __device__ __forceinline__ double block_sum(double value, double* s, int tid) {
     if (tid < stride) s[tid] += s[tid + stride];
     __syncthreads();
   }
-  return s[0];
+  const double sum = s[0];
+  __syncthreads();  // `s` may be reused at once
+  return sum;
+}
+
+// Whether this block is the last of its grid to get here (CUDA's threadFenceReduction pattern):
+// every block's thread 0 wrote its partial before the call; the last block may then read all
+// partials (with __ldcg: past the L1) and sum them in index order (deterministic). The counter is
+// back at 0 afterwards.
+__device__ __forceinline__ bool last_block(unsigned* counter, int tid) {
+  __shared__ bool last;
+  __threadfence();
+  if (tid == 0) {
+    const unsigned done = atomicAdd(counter, 1u);
+    last = done == gridDim.x - 1;
+    if (last) *counter = 0;
+  }
+  __syncthreads();
+  return last;
+}
+
+// Σ partial[0 .. count) in the fixed order of blowup/work totals (strided per thread, then
+// block_sum); for the last block only.
+__device__ __forceinline__ double sum_partials(const double* partial, int count, double* s,
+                                               int tid) {
+  double w = 0;
+  for (int k = tid; k < count; k += kBlock) w += __ldcg(partial + k);
+  return block_sum(w, s, tid);
 }
 
 // printf-style formatting for messages (fmt's compile-time format strings do not pass nvcc).
@@ -136,6 +163,7 @@ struct Status {
   int bad_jacobian;      // some element had J ≤ 0 or NaN
   int bad_displacement;  // some node got a NaN/Inf displacement
   int blowup;            // kinetic energy above the blow-up bound at a checked step
+  int slide_miss;        // a sliding node left its (ahead-refreshed) list: replay the batch
 };
 
 // The blow-up bound without the external work (which the device accumulates): factor × (base +
@@ -228,169 +256,301 @@ struct NodeData {
   std::int32_t n;
 };
 
+// External work and the blow-up test. The work is accumulated per node in double (each node adds
+// its own terms, in step order: no reduction per step); it is summed, in a fixed order, only where
+// it is read: at blow-up test steps (node kernel, below) and at sync points (host).
+struct StepSums {
+  double* work_acc;         // N per-node accumulated work (J), or null: no work in this model
+  const double* work_base;  // work carried in by restore() (J)
+  double* work_partial;     // per node-kernel block: Σ work_acc (test steps)
+  double* kinetic_partial;  // per node-kernel block: ½ M |v|² (test steps)
+  unsigned* counter;        // last-block detection of the node kernel
+  const BlowupBound* bound;
+  double inv_dt;
+};
+
+// Sliding: per surface its query view, per-triangle corners and skin (sliding_grid.hpp).
+template <typename T>
+struct SlideSurface {
+  SurfaceView<T> view;
+  const Vec3<T>* corners;  // triangle_corner_list: 3 per triangle
+  T skin;                  // s of the candidate lists (m)
+};
+
+// List capacity per sliding node (overflow: full search each step). The face-scale skull lists
+// 3.6 triangles per node on average (at most 10) with the default skin, 12.5 (at most 22) with 0.25.
+constexpr int kCandidates = 32;
+
+// Per sliding node k: node id, surface, rest distance, closest triangle (warm start), and its
+// candidate list: count (−1: none, search fully), anchor x_s, ids at list[j · count + k].
+template <typename T>
+struct SlideData {
+  const std::int32_t* node;
+  const std::int32_t* surface;
+  const T* distance;
+  std::int32_t* triangle;
+  std::int32_t* list_count;
+  Vec3<T>* anchor;
+  std::int32_t* list;
+  const SlideSurface<T>* surfaces;
+  std::int32_t count;
+  Status* status;
+};
+
+// Sliding node k at position x: while x is within s (1 − 1e-3) of the anchor of its list, the
+// list holds its closest triangle (sliding_grid.hpp) and nothing is done; otherwise the full grid
+// search finds the closest triangle (into triangle[k]), re-lists the triangles within d1 + 2 s and
+// moves the anchor to x (list count −1 when more than kCandidates: the triangle found is used).
+// `reach` (≤ 1): the fraction of s within which the anchor is kept (½ when refreshing ahead of the
+// step, from u(n), so that u(n+1) still lies within s of the anchor).
+template <typename T>
+__device__ __forceinline__ void refresh_slide_list(const SlideData<T>& d, std::int32_t k,
+                                                   const Vec3<T>& x, T reach) {
+  const SlideSurface<T>& sf = d.surfaces[d.surface[k]];
+  const T skin = sf.skin;
+  const T move = skin * T(0.999) * reach;
+  if (d.list_count[k] > 0 && squared_norm(x - d.anchor[k]) <= move * move) return;
+  std::int32_t t = d.triangle[k];
+  const Vec3<T> p = closest_surface_search<T, true>(sf.view, x, t);
+  d.triangle[k] = t;
+  const T d1 = std::sqrt(squared_norm(x - p));
+  d.list_count[k] =
+      collect_surface_candidates(sf.view, x, d1 + T(2) * skin, d.list + k, d.count, kCandidates);
+  d.anchor[k] = x;
+}
+
+// Sliding node k at displacement u: the closest triangle among its listed ones (or the one the
+// search found, when its list overflowed), then x' = p + d n (physics::project_to_rest_distance),
+// as physics::slide_node does. Returns the new displacement. kRefresh: refresh_slide_list at x
+// first (the grid search inline when needed). Otherwise slide_refresh_kernel refreshed the list
+// from u(n), ahead of the step: if x is not within s of its anchor (or the list overflowed) the
+// list may not hold the closest triangle, so the node raises status->slide_miss and the host
+// replays the batch with kRefresh (the result computed here is then discarded).
+template <typename T, bool kRefresh>
+__device__ __forceinline__ Vec3<T> slide_entry(const SlideData<T>& d, std::int32_t k,
+                                               const Vec3<T>& rest, const Vec3<T>& u) {
+  const Vec3<T> x = rest + u;
+  const SlideSurface<T>& sf = d.surfaces[d.surface[k]];
+  if constexpr (kRefresh) {
+    refresh_slide_list(d, k, x, T(1));
+  } else {
+    const T move = sf.skin * T(0.999);
+    if (!(d.list_count[k] > 0 && squared_norm(x - d.anchor[k]) <= move * move))
+      d.status->slide_miss = 1;
+  }
+  std::int32_t t = d.triangle[k];
+  const std::int32_t listed = d.list_count[k];
+  Vec3<T> p;
+  if (listed > 0) {
+    p = closest_listed_point(sf.corners, d.list + k, d.count, listed, x, t);
+    d.triangle[k] = t;
+  } else {
+    p = physics::closest_point_on_triangle(x, sf.corners[3 * t], sf.corners[3 * t + 1],
+                                           sf.corners[3 * t + 2]);
+  }
+  return physics::project_to_rest_distance(x, p, sf.view.normals[t], d.distance[k]) - rest;
+}
+
+// The loads and constraints of a step as one program per constrained node: op = kind << 28 | arg,
+// a node's ops in the CPU's order (nodal forces by set, capture of u*, sliding, planes in list
+// order, prescribed sets in order, rigid). Each op reads and writes only its node, so one thread
+// per node running its ops in that order gives the CPU's result with no race (a node in two sets,
+// or on two planes, included).
+enum ConstraintOp : std::int32_t {
+  kOpForce = 0,      // arg: force set
+  kOpCapture = 1,    // arg: prescribed entry q (u* = u)
+  kOpSlide = 2,      // arg: sliding entry
+  kOpPlane = 3,      // arg: plane entry (its unit normal)
+  kOpPrescribe = 4,  // arg: prescribed entry q
+  kOpRigid = 5,
+};
+constexpr std::int32_t kOpShift = 28, kOpArg = (1 << kOpShift) - 1;
+
+template <typename T>
+struct ConstraintData {
+  const std::int32_t* node;    // C constrained nodes
+  const std::int32_t* offset;  // C + 1
+  const std::int32_t* op;
+  std::int32_t count;
+  const T* inverse_mass;
+  physics::CentralDifference<T> cd;
+  const Vec3<T>* force_per_node;        // per force set
+  const std::int32_t* prescribed_set;   // per prescribed entry
+  const Vec3<T>* prescribed_value;      // per prescribed set
+  const std::int32_t* prescribed_mask;  // per prescribed set: bit c = component c prescribed
+  Vec3<T>* prescribed_free;             // per prescribed entry: u* before constraints
+  const Vec3<T>* plane_normal;          // per plane entry
+  SlideData<T> slide;
+  const Vec3<T>* rest;
+  const Vec3<T>* gravity;  // per node; null without gravity
+  std::int32_t force_sets;
+};
+
+// Runs ops [begin, end) of node i on v (its u(n+1) after the update) and, with `work`, adds the
+// work of its nodal forces and prescribed constraint forces, Σ R · (u(n+1) − u(n−1))/2 with the
+// constraint force (u − u*)/A, to w. factor: [force factors at t_n | prescribed factors at t_n+1].
+// With `loads` off (the initial constraints at t = 0) nodal forces and captures are skipped.
+// kSlide: 0 the model has no sliding (the op is compiled out); 1 sliding with the list refresh
+// (and grid search) inline; 2 sliding with lists refreshed ahead by slide_refresh_kernel.
+template <typename T, int kSlide>
+__device__ __forceinline__ Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i,
+                                               std::int32_t begin, std::int32_t end,
+                                               const T* factor, bool loads, Vec3<T> v,
+                                               const Vec3<T>* up, bool work, double& w) {
+  for (std::int32_t q = begin; q < end; ++q) {
+    const std::int32_t code = d.op[q], arg = code & kOpArg;
+    switch (code >> kOpShift) {
+      case kOpForce:
+        if (loads)
+          physics::add_nodal_force(d.cd, d.inverse_mass[i], factor[arg] * d.force_per_node[arg], v);
+        break;
+      case kOpCapture:
+        if (loads) d.prescribed_free[arg] = v;
+        break;
+      case kOpSlide:
+        if constexpr (kSlide != 0) v = slide_entry<T, kSlide == 1>(d.slide, arg, d.rest[i], v);
+        break;
+      case kOpPlane:
+        v = physics::project_to_plane(v, d.plane_normal[arg]);
+        break;
+      case kOpPrescribe: {
+        const std::int32_t set = d.prescribed_set[arg], mask = d.prescribed_mask[set];
+        const bool comps[3] = {(mask & 1) != 0, (mask & 2) != 0, (mask & 4) != 0};
+        physics::prescribe(factor[d.force_sets + set], d.prescribed_value[set], comps, v);
+        break;
+      }
+      default:
+        v = Vec3<T>{T(0), T(0), T(0)};
+    }
+  }
+  if (work && begin < end) {
+    const Vec3<T> vp = up[i];
+    for (std::int32_t q = begin; q < end; ++q) {
+      const std::int32_t code = d.op[q], arg = code & kOpArg, kind = code >> kOpShift;
+      if (kind == kOpForce) {
+        const double f = double(factor[arg]);
+        for (int k = 0; k < 3; ++k)
+          w += f * double(d.force_per_node[arg][k]) * 0.5 * (double(v[k]) - double(vp[k]));
+      } else if (kind == kOpPrescribe) {
+        const double a = double(d.cd.a_over_inverse_mass) * double(d.inverse_mass[i]);
+        for (int k = 0; k < 3; ++k) {
+          const double fc = (double(v[k]) - double(d.prescribed_free[arg][k])) / a;
+          w += fc * 0.5 * (double(v[k]) - double(vp[k]));
+        }
+      }
+    }
+  }
+  return v;
+}
+
+// Models with sliding: after the node kernel, one thread per constrained node runs its program
+// and adds to the node's accumulated work the program's work and the change its constraints make
+// to the gravity term (the node kernel added g · (u(n+1) − u(n−1))/2 before constraints).
+template <typename T, int kSlide>
+__global__ void __launch_bounds__(kBlock, kSlide == 2 ? 4 : 1)
+    constraint_kernel(ConstraintData<T> d, const T* factor, bool loads, Vec3<T>* un,
+                      const Vec3<T>* up, StepSums sums) {
+  const std::int32_t c = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
+  if (c >= d.count) return;
+  const std::int32_t i = d.node[c];
+  const Vec3<T> before = un[i];
+  double w = 0;
+  const bool work = loads && sums.work_acc;
+  const Vec3<T> v = run_program<T, kSlide>(d, i, d.offset[c], d.offset[c + 1], factor, loads,
+                                           before, up, work, w);
+  un[i] = v;
+  if (work) {
+    if (d.gravity)
+      for (int k = 0; k < 3; ++k)
+        w += double(d.gravity[i][k]) * 0.5 * (double(v[k]) - double(before[k]));
+    sums.work_acc[i] += w;
+  }
+}
+
+// Ahead of a step, concurrently with its element and node kernels (a parallel branch of the
+// graph): one thread per sliding entry k refreshes its list at its position of u(n), keeping the
+// anchor while within s/2 of it, so the grid searches leave the step's critical path and
+// constraint_kernel<T, 2> carries no search code. A node that then moves more than s/2 in the step
+// raises slide_miss there (exactness is kept by a replay).
+template <typename T>
+__global__ void __launch_bounds__(kBlock)
+    slide_refresh_kernel(SlideData<T> d, const Vec3<T>* __restrict__ rest, const Vec3<T>* u) {
+  const std::int32_t k = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
+  if (k >= d.count) return;
+  const std::int32_t i = d.node[k];
+  refresh_slide_list(d, k, rest[i] + u[i], T(0.5));
+}
+
 // Gather (or read and clear the atomic sums) + central-difference update + finite check.
-template <typename T, bool kGather, bool kGravity>
+// kProgram (models without sliding): the node's loads and constraints too (its ops at
+// node_offset[i] .. node_offset[i + 1] of program.op), so the step needs no constraint kernel.
+// Work: the node's terms of this step (gravity; kProgram: its loads and constraint forces; without
+// kProgram gravity before constraints, the constraint kernel adds the rest) added to its
+// accumulator. kEnergyTest (blow-up test steps): the kinetic energy of u(n), u(n−1) and the work up
+// to step n − 1 (the accumulators before this step's terms), each summed per block and then by the
+// last block in block order, and the test against the bound.
+template <typename T, bool kGather, bool kGravity, bool kEnergyTest, bool kProgram>
 __global__ void __launch_bounds__(kBlock)
     node_kernel(NodeData<T> d, const Vec3<T>* __restrict__ element_force,
                 Vec3<T>* __restrict__ f_sum, const Vec3<T>* __restrict__ u,
-                const Vec3<T>* __restrict__ up, Vec3<T>* __restrict__ un, Status* status) {
+                const Vec3<T>* __restrict__ up, Vec3<T>* __restrict__ un, Status* status,
+                StepSums sums, ConstraintData<T> program, const std::int32_t* node_offset,
+                const T* factor) {
   const std::int32_t i = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  if (i >= d.n) return;
-  Vec3<T> f;
-  if constexpr (kGather) {
-    f = physics::gather_node_force(element_force, d.inc, d.offset[i], d.offset[i + 1]);
-  } else {
-    f = f_sum[i];
-    f_sum[i] = Vec3<T>{T(0), T(0), T(0)};
-  }
-  Vec3<T> g{T(0), T(0), T(0)};
-  if constexpr (kGravity) g = d.gravity[i];
-  const Vec3<T> v = physics::node_update<T, kGravity>(d.cd, d.inverse_mass[i], f, g, u[i], up[i]);
-  un[i] = v;
-  if (!(isfinite(v.x) && isfinite(v.y) && isfinite(v.z))) status->bad_displacement = 1;
-}
-
-// Nodal forces of one set: u(n+1) += A · factor · per_node.
-template <typename T>
-__global__ void force_kernel(const std::int32_t* nodes, std::int32_t count, const T* inverse_mass,
-                             physics::CentralDifference<T> cd, Vec3<T> per_node, const T* factor,
-                             Vec3<T>* un) {
-  const std::int32_t k = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  if (k >= count) return;
-  const std::int32_t i = nodes[k];
-  physics::add_nodal_force(cd, inverse_mass[i], *factor * per_node, un[i]);
-}
-
-template <typename T>
-__global__ void capture_kernel(const std::int32_t* nodes, std::int32_t count, const Vec3<T>* un,
-                               Vec3<T>* out) {
-  const std::int32_t k = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  if (k < count) out[k] = un[nodes[k]];
-}
-
-template <typename T>
-__global__ void sliding_kernel(const std::int32_t* nodes, const std::int32_t* surface,
-                               const T* distance, std::int32_t* triangle, std::int32_t count,
-                               const SurfaceView<T>* views, const Vec3<T>* rest, Vec3<T>* un) {
-  const std::int32_t k = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  if (k >= count) return;
-  const std::int32_t i = nodes[k];
-  std::int32_t t = triangle[k];
-  un[i] = physics::slide_node(views[surface[k]], rest[i], un[i], distance[k], t);
-  triangle[k] = t;
-}
-
-// One thread per constrained node applies its planes in the order listed (as the CPU loop does):
-// a node on several planes (an edge of symmetry planes) must not race with itself.
-template <typename T>
-__global__ void plane_kernel(const std::int32_t* nodes, const std::int32_t* offset,
-                             const Vec3<T>* normals, std::int32_t count, Vec3<T>* un) {
-  const std::int32_t k = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  if (k >= count) return;
-  Vec3<T> v = un[nodes[k]];
-  for (std::int32_t q = offset[k]; q < offset[k + 1]; ++q)
-    v = physics::project_to_plane(v, normals[q]);
-  un[nodes[k]] = v;
-}
-
-// Kinetic energy ½ Σ M |v|², v = (u − u(n−1))/Δt, in double: block sums in a fixed tree order.
-template <typename T>
-__global__ void __launch_bounds__(kBlock)
-    kinetic_kernel(std::int32_t n, const T* inverse_mass, const Vec3<T>* u, const Vec3<T>* up,
-                   double inv_dt, double* partial) {
-  __shared__ double s[kBlock];
-  const std::int32_t i = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  double e = 0;
-  if (i < n) {
-    const double vx = (double(u[i].x) - double(up[i].x)) * inv_dt;
-    const double vy = (double(u[i].y) - double(up[i].y)) * inv_dt;
-    const double vz = (double(u[i].z) - double(up[i].z)) * inv_dt;
-    e = 0.5 / double(inverse_mass[i]) * (vx * vx + vy * vy + vz * vz);
-  }
-  const double sum = block_sum(e, s, int(threadIdx.x));
-  if (threadIdx.x == 0) partial[blockIdx.x] = sum;
-}
-
-__global__ void __launch_bounds__(kBlock)
-    blowup_kernel(const double* partial, int count, const double* work, const BlowupBound* bound,
-                  Status* status) {
-  __shared__ double s[kBlock];
-  double w = 0;
-  for (int k = int(threadIdx.x); k < count; k += kBlock) w += partial[k];
-  const double sum = block_sum(w, s, int(threadIdx.x));
-  if (threadIdx.x == 0) {
-    const double ke = sum;
-    if (!isfinite(ke) || ke > bound->factor * (bound->base + fabs(*work))) status->blowup = 1;
-  }
-}
-
-template <typename T>
-__global__ void prescribe_kernel(const std::int32_t* nodes, std::int32_t count, Vec3<T> value,
-                                 bool cx, bool cy, bool cz, const T* factor, Vec3<T>* un) {
-  const std::int32_t k = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  if (k >= count) return;
-  const bool comps[3] = {cx, cy, cz};
-  physics::prescribe(*factor, value, comps, un[nodes[k]]);
-}
-
-template <typename T>
-__global__ void rigid_kernel(const std::int32_t* nodes, std::int32_t count, Vec3<T>* un) {
-  const std::int32_t k = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  if (k < count) un[nodes[k]] = Vec3<T>{T(0), T(0), T(0)};
-}
-
-// External work of one step, centred: Σ R · (u(n+1) − u(n−1)) / 2 over gravity (every node),
-// nodal-force entries and prescribed entries (constraint force (u − u*)/A). Per-block sums in a
-// fixed tree order, then one block adds the block sums in order: deterministic.
-template <typename T>
-struct WorkData {
-  std::int32_t n_gravity;  // N or 0
-  const Vec3<T>* gravity;
-  std::int32_t n_force;
-  const std::int32_t* force_node;
-  const std::int32_t* force_set;
-  const Vec3<T>* force_per_node;  // per set
-  std::int32_t n_prescribed;
-  const std::int32_t* prescribed_node;
-  const Vec3<T>* prescribed_free;
-  const T* inverse_mass;
-  double a_over_inverse_mass;
-};
-
-template <typename T>
-__global__ void __launch_bounds__(kBlock)
-    work_kernel(WorkData<T> d, const T* force_factor, const Vec3<T>* un, const Vec3<T>* up,
-                double* partial) {
-  __shared__ double s[kBlock];
-  const std::int32_t k = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
-  double w = 0;
-  if (k < d.n_gravity) {
-    for (int c = 0; c < 3; ++c)
-      w += double(d.gravity[k][c]) * 0.5 * (double(un[k][c]) - double(up[k][c]));
-  } else if (k < d.n_gravity + d.n_force) {
-    const std::int32_t q = k - d.n_gravity, i = d.force_node[q], set = d.force_set[q];
-    const double f = double(force_factor[set]);
-    for (int c = 0; c < 3; ++c)
-      w += f * double(d.force_per_node[set][c]) * 0.5 * (double(un[i][c]) - double(up[i][c]));
-  } else if (k < d.n_gravity + d.n_force + d.n_prescribed) {
-    const std::int32_t q = k - d.n_gravity - d.n_force, i = d.prescribed_node[q];
-    const double a = d.a_over_inverse_mass * double(d.inverse_mass[i]);
-    for (int c = 0; c < 3; ++c) {
-      const double fc = (double(un[i][c]) - double(d.prescribed_free[q][c])) / a;
-      w += fc * 0.5 * (double(un[i][c]) - double(up[i][c]));
+  double ke = 0, w_old = 0;
+  if (i < d.n) {
+    Vec3<T> f;
+    if constexpr (kGather) {
+      f = physics::gather_node_force(element_force, d.inc, d.offset[i], d.offset[i + 1]);
+    } else {
+      f = f_sum[i];
+      f_sum[i] = Vec3<T>{T(0), T(0), T(0)};
+    }
+    Vec3<T> g{T(0), T(0), T(0)};
+    if constexpr (kGravity) g = d.gravity[i];
+    const Vec3<T> ui = u[i], upi = up[i];
+    const T im = d.inverse_mass[i];
+    Vec3<T> v = physics::node_update<T, kGravity>(d.cd, im, f, g, ui, upi);
+    if (!(isfinite(v.x) && isfinite(v.y) && isfinite(v.z))) status->bad_displacement = 1;
+    double w = 0;
+    bool has_work = kGravity;
+    if constexpr (kProgram) {
+      const std::int32_t begin = node_offset[i], end = node_offset[i + 1];
+      v = run_program<T, 0>(program, i, begin, end, factor, true, v, up, sums.work_acc, w);
+      has_work = has_work || begin < end;
+    }
+    un[i] = v;
+    if constexpr (kGravity)
+      for (int c = 0; c < 3; ++c) w += double(g[c]) * 0.5 * (double(v[c]) - double(upi[c]));
+    if (sums.work_acc && (has_work || kEnergyTest)) {
+      w_old = sums.work_acc[i];
+      if (has_work) sums.work_acc[i] = w_old + w;
+    }
+    if constexpr (kEnergyTest) {
+      const double vx = (double(ui.x) - double(upi.x)) * sums.inv_dt;
+      const double vy = (double(ui.y) - double(upi.y)) * sums.inv_dt;
+      const double vz = (double(ui.z) - double(upi.z)) * sums.inv_dt;
+      ke = 0.5 / double(im) * (vx * vx + vy * vy + vz * vz);
     }
   }
-  const double sum = block_sum(w, s, int(threadIdx.x));
-  if (threadIdx.x == 0) partial[blockIdx.x] = sum;
-}
-
-__global__ void __launch_bounds__(kBlock)
-    work_total_kernel(const double* partial, int count, double* total) {
-  __shared__ double s[kBlock];
-  double w = 0;
-  for (int k = int(threadIdx.x); k < count; k += kBlock) w += partial[k];
-  const double sum = block_sum(w, s, int(threadIdx.x));
-  if (threadIdx.x == 0) *total += sum;
+  if constexpr (kEnergyTest) {
+    __shared__ double sh[kBlock];
+    const int tid = int(threadIdx.x);
+    const double k_sum = block_sum(ke, sh, tid);
+    const double w_sum = sums.work_acc ? block_sum(w_old, sh, tid) : 0.0;  // uniform
+    if (tid == 0) {
+      sums.kinetic_partial[blockIdx.x] = k_sum;
+      sums.work_partial[blockIdx.x] = w_sum;
+    }
+    if (last_block(sums.counter, tid)) {
+      const double kinetic = sum_partials(sums.kinetic_partial, int(gridDim.x), sh, tid);
+      const double work =
+          *sums.work_base + sum_partials(sums.work_partial, int(gridDim.x), sh, tid);
+      if (tid == 0 &&
+          (!isfinite(kinetic) || kinetic > sums.bound->factor * (sums.bound->base + fabs(work))))
+        status->blowup = 1;
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -414,7 +574,7 @@ struct DeviceSurface {
   DeviceArray<Vec3<T>> vertices, normals;
   DeviceArray<std::array<std::int32_t, 3>> triangles;
   DeviceArray<std::int32_t> cell_offsets, cell_triangles;
-  DeviceArray<Vec3<T>> entry_corners, cell_boxes;
+  DeviceArray<Vec3<T>> entry_corners, cell_boxes, triangle_corners;
 };
 
 template <typename T>
@@ -450,7 +610,25 @@ class CudaEngine final : public Backend, public CudaTiming {
   double curve_time(double t) const { return t / setup_.time_scaling; }
   void fill_scalars(std::int64_t first_step, int count, int slot0);
   void launch_elements(const Vec3<T>* u, const T* activation, int mode, cudaStream_t s);
-  void launch_step(std::int64_t step, int slot, cudaStream_t s, bool blowup_test = false,
+  // ahead: the lists were refreshed from u(n) by slide_refresh_kernel (launch_step).
+  void launch_constraints(const T* factor, bool loads, Vec3<T>* un, const Vec3<T>* up,
+                          cudaStream_t s, bool ahead) {
+    const unsigned g = blocks_for(con_node_.size());
+    if (slide_node_.size() && ahead)
+      constraint_kernel<T, 2>
+          <<<g, kBlock, 0, s>>>(constraint_data(), factor, loads, un, up, step_sums());
+    else if (slide_node_.size())
+      constraint_kernel<T, 1>
+          <<<g, kBlock, 0, s>>>(constraint_data(), factor, loads, un, up, step_sums());
+    else
+      constraint_kernel<T, 0>
+          <<<g, kBlock, 0, s>>>(constraint_data(), factor, loads, un, up, step_sums());
+    SINEW_CUDA_LAUNCHED();
+  }
+  // ahead: sliding lists refreshed ahead on slide_stream_ (graph steps, stage timing); direct
+  // steps refresh inline and never miss.
+  void launch_step(std::int64_t step, int slot, cudaStream_t s, bool ahead_slide,
+                   bool blowup_test = false,
                    std::vector<std::pair<std::string, cudaEvent_t>>* marks = nullptr);
   std::vector<std::pair<std::string, float>> stage_times(int repeats) override;
   void build_graph();
@@ -492,6 +670,12 @@ class CudaEngine final : public Backend, public CudaTiming {
 
   cudaStream_t stream_ = nullptr, copy_stream_ = nullptr;
   cudaEvent_t copy_ready_ = nullptr;
+  // Element collections after the first run on side streams, forked from and joined to the step
+  // stream (parallel branches of the captured graph): small collections fill the GPU together.
+  std::vector<cudaStream_t> side_streams_;
+  std::vector<cudaEvent_t> side_done_;
+  cudaEvent_t fork_ = nullptr;
+  int sm_count_ = 132;
   cudaGraphExec_t graph_ = nullptr;
 
   // elements
@@ -517,26 +701,73 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<T> scalars_;
   PinnedArray<T> scalars_host_;
   // loads and constraints
-  std::vector<DeviceArray<std::int32_t>> force_nodes_, prescribed_nodes_;
-  DeviceArray<std::int32_t> force_node_all_, force_set_all_, prescribed_node_all_;
-  DeviceArray<Vec3<T>> force_per_node_, prescribed_free_;
-  std::vector<std::size_t> prescribed_start_;
-  DeviceArray<std::int32_t> plane_nodes_, plane_offset_, rigid_;
-  DeviceArray<Vec3<T>> plane_normals_;
+  // loads and constraints: one program per constrained node (constraint_kernel)
+  DeviceArray<std::int32_t> con_node_, con_offset_, con_op_;
+  bool program_in_node_ = false;  // no sliding: the node kernel runs the programs
+  // Sliding lists refreshed ahead of each graph step (slide_refresh_kernel on slide_stream_);
+  // false after repeated misses, and in direct steps (inline refresh): docs/cuda-backend.md.
+  bool slide_ahead_ = true;
+  int slide_miss_batches_ = 0;
+  cudaStream_t slide_stream_ = nullptr;
+  cudaEvent_t slide_fork_ = nullptr, slide_done_ = nullptr;
+  DeviceArray<std::int32_t> node_op_offset_;  // N + 1 into con_op_ (program_in_node_)
+  DeviceArray<std::int32_t> prescribed_set_, prescribed_mask_;
+  DeviceArray<Vec3<T>> force_per_node_, prescribed_value_, prescribed_free_, plane_normals_;
+  ConstraintData<T> constraint_data() const {
+    return {con_node_.get(),
+            con_offset_.get(),
+            con_op_.get(),
+            std::int32_t(con_node_.size()),
+            inverse_mass_.get(),
+            cd_,
+            force_per_node_.get(),
+            prescribed_set_.get(),
+            prescribed_value_.get(),
+            prescribed_mask_.get(),
+            prescribed_free_.get(),
+            plane_normals_.get(),
+            slide_data(),
+            rest_.get(),
+            setup_.effects.gravity ? gravity_.get() : nullptr,
+            std::int32_t(prep_.forces.size())};
+  }
+  StepSums step_sums() const {
+    return {work_ ? work_acc_.get() : nullptr,
+            work_base_.get(),
+            work_partial_.get(),
+            ke_partial_.get(),
+            counters_.get(),
+            bound_.get(),
+            1.0 / dt_};
+  }
   // kinetic-energy blow-up test inside graphs (at steps ≡ 0 mod energy_interval)
   int interval_ = 10;
   std::int64_t align_ = 3;  // graphs start at steps ≡ 0 mod align_ (3, or lcm(3, interval))
   bool graph_blowup_ = false;
-  DeviceArray<double> ke_partial_;
+  DeviceArray<double> ke_partial_, work_partial_;
+  DeviceArray<unsigned> counters_;
   DeviceArray<BlowupBound> bound_;
   std::vector<std::unique_ptr<DeviceSurface<T>>> surfaces_;
-  DeviceArray<SurfaceView<T>> views_;
+  DeviceArray<SlideSurface<T>> slide_surfaces_;
   DeviceArray<std::int32_t> slide_node_, slide_surface_, slide_triangle_, snap_triangle_;
+  DeviceArray<std::int32_t> slide_list_count_, slide_list_;
+  DeviceArray<Vec3<T>> slide_anchor_;
+  SlideData<T> slide_data() const {
+    return {slide_node_.get(),     slide_surface_.get(),    slide_distance_.get(),
+            slide_triangle_.get(), slide_list_count_.get(), slide_anchor_.get(),
+            slide_list_.get(),     slide_surfaces_.get(),   std::int32_t(slide_node_.size()),
+            status_.get()};
+  }
+  void forget_slide_lists(cudaStream_t s) {  // every node searches fully at its next step
+    if (slide_list_count_.size())
+      SINEW_CUDA_CHECK(
+          cudaMemsetAsync(slide_list_count_.get(), 0xff, slide_list_count_.bytes(), s));
+  }
   DeviceArray<T> slide_distance_;
   bool work_ = false;
-  std::size_t work_items_ = 0;
-  DeviceArray<double> work_partial_, work_total_;
-  double snap_work_ = 0;
+  // external work: per-node accumulators (StepSums) + the base carried in by restore()
+  DeviceArray<double> work_acc_, snap_work_acc_, work_base_;
+  double work_sum(const double* acc) const;  // base + Σ acc (host, node order); syncs
   // status and output
   DeviceArray<Status> status_;
   PinnedArray<Status> status_host_;
@@ -547,6 +778,10 @@ template <typename T>
 CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan plan,
                           const CudaOptions& options)
     : setup_(setup), plan_(std::move(plan)), options_(options) {
+  if (!(options.sliding_skin > 0) || !std::isfinite(options.sliding_skin))
+    throw ConfigError(
+        "", "sliding_skin",
+        format("must be a positive number of grid cells, got %g", options.sliding_skin));
   SINEW_CUDA_CHECK(cudaSetDevice(options.device));
   prep_ = prepare_model(model, setup, plan_);
   dt_ = plan_.dt;
@@ -585,6 +820,18 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     dc.muscle = c.muscle;
     dc.elements.upload(to_i32(c.elements));
     collections_.push_back(std::move(dc));
+  }
+  SINEW_CUDA_CHECK(
+      cudaDeviceGetAttribute(&sm_count_, cudaDevAttrMultiProcessorCount, options.device));
+  SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&fork_, cudaEventDisableTiming));
+  SINEW_CUDA_CHECK(cudaStreamCreateWithFlags(&slide_stream_, cudaStreamNonBlocking));
+  SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&slide_fork_, cudaEventDisableTiming));
+  SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&slide_done_, cudaEventDisableTiming));
+  for (std::size_t c = 1; c < collections_.size(); ++c) {
+    side_streams_.emplace_back();
+    SINEW_CUDA_CHECK(cudaStreamCreateWithFlags(&side_streams_.back(), cudaStreamNonBlocking));
+    side_done_.emplace_back();
+    SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&side_done_.back(), cudaEventDisableTiming));
   }
   if (fx.muscles) {
     muscle_offset_.upload(
@@ -637,51 +884,79 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   snap_u_.allocate(n_);
   snap_up_.allocate(n_);
 
-  // Loads and constraints.
-  std::vector<std::int32_t> fn_all, fs_all, pn_all;
-  std::vector<Vec3<T>> fpn;
-  for (std::size_t s = 0; s < prep_.forces.size(); ++s) {
-    force_nodes_.emplace_back();
-    force_nodes_.back().upload(to_i32(prep_.forces[s].nodes));
-    for (auto nd : prep_.forces[s].nodes) {
-      fn_all.push_back(nd);
-      fs_all.push_back(std::int32_t(s));
-    }
-    fpn.push_back(to_vec<T>(prep_.forces[s].per_node));
-  }
-  for (const auto& p : prep_.prescribed) {
-    prescribed_start_.push_back(pn_all.size());
-    prescribed_nodes_.emplace_back();
-    prescribed_nodes_.back().upload(to_i32(p.nodes));
-    for (auto nd : p.nodes) pn_all.push_back(nd);
-  }
-  force_node_all_.upload(fn_all);
-  force_set_all_.upload(fs_all);
-  force_per_node_.upload(fpn);
-  prescribed_node_all_.upload(pn_all);
-  prescribed_free_.allocate(pn_all.size());
+  // Loads and constraints: per node its ops in the CPU's order (constraint_kernel).
+  std::size_t prescribed_entries = 0;
   {
-    // Planes grouped by node, nodes in order of first appearance, each node's planes in list order.
-    std::vector<std::int32_t> order;
-    std::vector<std::vector<std::size_t>> entries(n_);
-    for (std::size_t k = 0; k < prep_.plane_nodes.size(); ++k) {
-      const auto nd = std::size_t(prep_.plane_nodes[k]);
-      if (entries[nd].empty()) order.push_back(std::int32_t(nd));
-      entries[nd].push_back(k);
+    struct Entry {
+      std::int32_t node, code;
+    };
+    std::vector<Entry> ops;
+    auto add = [&](Index node, ConstraintOp kind, std::size_t arg) {
+      if (arg > std::size_t(kOpArg))
+        throw ConfigError("", "model", "too many constraint entries for the CUDA backend");
+      ops.push_back({std::int32_t(node), std::int32_t(kind) << kOpShift | std::int32_t(arg)});
+    };
+    std::vector<Vec3<T>> fpn, pv;
+    std::vector<std::int32_t> pset, pmask;
+    for (std::size_t s = 0; s < prep_.forces.size(); ++s) {
+      for (auto nd : prep_.forces[s].nodes) add(nd, kOpForce, s);
+      fpn.push_back(to_vec<T>(prep_.forces[s].per_node));
     }
-    std::vector<std::int32_t> offset{0};
+    for (std::size_t s = 0; s < prep_.prescribed.size(); ++s) {
+      const auto& p = prep_.prescribed[s];
+      for (auto nd : p.nodes) {
+        add(nd, kOpCapture, pset.size());
+        pset.push_back(std::int32_t(s));
+      }
+      pv.push_back(to_vec<T>(p.per_node));
+      pmask.push_back((p.components[0] ? 1 : 0) | (p.components[1] ? 2 : 0) |
+                      (p.components[2] ? 4 : 0));
+    }
+    prescribed_entries = pset.size();
+    for (std::size_t k = 0; k < prep_.slide_node.size(); ++k) add(prep_.slide_node[k], kOpSlide, k);
     std::vector<Vec3<T>> pn;
-    for (auto nd : order) {
-      for (auto k : entries[std::size_t(nd)]) pn.push_back(to_vec<T>(prep_.plane_normals[k]));
-      offset.push_back(std::int32_t(pn.size()));
+    for (std::size_t k = 0; k < prep_.plane_nodes.size(); ++k) {
+      add(prep_.plane_nodes[k], kOpPlane, k);
+      pn.push_back(to_vec<T>(prep_.plane_normals[k]));
     }
-    plane_nodes_.upload(order);
-    plane_offset_.upload(offset);
+    {
+      std::size_t q = 0;
+      for (const auto& p : prep_.prescribed)
+        for (auto nd : p.nodes) add(nd, kOpPrescribe, q++);
+    }
+    for (auto nd : prep_.rigid) add(nd, kOpRigid, 0);
+    // Grouped by node (ascending ids: neighbouring sliding nodes share warps), each node's ops
+    // in the order added above, which is the CPU's order.
+    std::stable_sort(ops.begin(), ops.end(),
+                     [](const Entry& x, const Entry& y) { return x.node < y.node; });
+    std::vector<std::int32_t> node, offset{0}, code;
+    for (std::size_t k = 0; k < ops.size(); ++k) {
+      if (k == 0 || ops[k].node != ops[k - 1].node) {
+        if (k) offset.push_back(std::int32_t(k));
+        node.push_back(ops[k].node);
+      }
+      code.push_back(ops[k].code);
+    }
+    if (!ops.empty()) offset.push_back(std::int32_t(ops.size()));
+    if (prep_.slide_node.empty()) {
+      std::vector<std::int32_t> per_node(n_ + 1, 0);
+      for (std::size_t c = 0; c < node.size(); ++c)
+        per_node[std::size_t(node[c]) + 1] = offset[c + 1] - offset[c];
+      for (std::size_t k = 0; k < n_; ++k) per_node[k + 1] += per_node[k];
+      node_op_offset_.upload(per_node);
+    }
+    con_node_.upload(node);
+    con_offset_.upload(offset);
+    con_op_.upload(code);
+    force_per_node_.upload(fpn);
+    prescribed_value_.upload(pv);
+    prescribed_mask_.upload(pmask);
+    prescribed_set_.upload(pset);
+    prescribed_free_.allocate(pset.size());
     plane_normals_.upload(pn);
   }
-  rigid_.upload(to_i32(prep_.rigid));
   if (!prep_.surfaces.empty()) {
-    std::vector<SurfaceView<T>> views;
+    std::vector<SlideSurface<T>> views;
     for (const auto& s : prep_.surfaces) {
       auto ds = std::make_unique<DeviceSurface<T>>();
       std::vector<Vec3<T>> v, nrm;
@@ -697,6 +972,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
       const SurfaceLists<T> lists = make_surface_lists(s.grid, v, s.triangles);
       ds->entry_corners.upload(lists.corners);
       ds->cell_boxes.upload(lists.cell);
+      ds->triangle_corners.upload(triangle_corner_list(v, s.triangles));
       SurfaceView<T> view;
       view.vertices = ds->vertices.get();
       view.triangles = ds->triangles.get();
@@ -711,22 +987,35 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
         view.dims[k] = s.grid.dims[std::size_t(k)];
       }
       view.cell = T(s.grid.cell);
-      views.push_back(view);
+      views.push_back({view, ds->triangle_corners.get(), T(options.sliding_skin * s.grid.cell)});
       surfaces_.push_back(std::move(ds));
     }
-    views_.upload(views);
+    slide_surfaces_.upload(views);
     slide_node_.upload(to_i32(prep_.slide_node));
     slide_surface_.upload(prep_.slide_surface);
     slide_triangle_.upload(prep_.slide_triangle);
     snap_triangle_.allocate(prep_.slide_triangle.size());
+    slide_list_count_.allocate(prep_.slide_node.size());
+    slide_list_.allocate(prep_.slide_node.size() * kCandidates);
+    slide_anchor_.allocate(prep_.slide_node.size());
+    forget_slide_lists(stream_);
     std::vector<T> d(prep_.slide_distance.begin(), prep_.slide_distance.end());
     slide_distance_.upload(d);
   }
-  work_ = fx.gravity || !fn_all.empty() || !pn_all.empty();
-  work_items_ = (fx.gravity ? n_ : 0) + fn_all.size() + pn_all.size();
-  work_partial_.allocate(std::max<std::size_t>(1, blocks_for(work_items_)));
-  work_total_.allocate(1);
-  work_total_.zero();
+  work_ = fx.gravity || !prep_.forces.empty() || prescribed_entries > 0;
+  program_in_node_ = prep_.slide_node.empty() && (con_node_.size() || work_);
+  work_base_.allocate(1);
+  work_base_.zero();
+  if (work_) {
+    work_acc_.allocate(n_);
+    work_acc_.zero();
+    snap_work_acc_.allocate(n_);
+  }
+  work_partial_.allocate(blocks_for(n_));
+  ke_partial_.allocate(blocks_for(n_));
+  counters_.allocate(1);
+  counters_.zero();
+  bound_.upload({BlowupBound{0, 0}});
 
   scalars_per_slot_ =
       std::max<std::size_t>(1, muscles_ + prep_.forces.size() + prep_.prescribed.size());
@@ -745,24 +1034,9 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     fill_scalars(-1, 1, int(batch_));  // slot `batch_`: prescribed factors at t = 0
     Vec3<T>* u0 = buf_[0].get();
     const T* sc = scalars_.get() + scalars_per_slot_ * std::size_t(batch_);
-    if (slide_node_.size())
-      sliding_kernel<T><<<blocks_for(slide_node_.size()), kBlock, 0, stream_>>>(
-          slide_node_.get(), slide_surface_.get(), slide_distance_.get(), slide_triangle_.get(),
-          std::int32_t(slide_node_.size()), views_.get(), rest_.get(), u0);
-    if (plane_nodes_.size())
-      plane_kernel<T><<<blocks_for(plane_nodes_.size()), kBlock, 0, stream_>>>(
-          plane_nodes_.get(), plane_offset_.get(), plane_normals_.get(),
-          std::int32_t(plane_nodes_.size()), u0);
-    for (std::size_t s = 0; s < prep_.prescribed.size(); ++s) {
-      const auto& p = prep_.prescribed[s];
-      prescribe_kernel<T><<<blocks_for(p.nodes.size()), kBlock, 0, stream_>>>(
-          prescribed_nodes_[s].get(), std::int32_t(p.nodes.size()), to_vec<T>(p.per_node),
-          p.components[0], p.components[1], p.components[2],
-          sc + muscles_ + prep_.forces.size() + s, u0);
+    if (con_node_.size()) {
+      launch_constraints(sc + muscles_, false, u0, u0, stream_, false);
     }
-    if (rigid_.size())
-      rigid_kernel<T><<<blocks_for(rigid_.size()), kBlock, 0, stream_>>>(
-          rigid_.get(), std::int32_t(rigid_.size()), u0);
     SINEW_CUDA_LAUNCHED();
     SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
     std::vector<Vec3<T>> u = download_vec(u0), up = u;
@@ -777,8 +1051,6 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   }
   const Energies e0 = energies();
   initial_energy_ = std::max(0.0, e0.kinetic + e0.strain + e0.hourglass);
-  ke_partial_.allocate(std::max<std::size_t>(1, blocks_for(n_)));
-  bound_.upload({BlowupBound{0, 0}});
   update_bound();
   build_graph();
 }
@@ -789,6 +1061,12 @@ CudaEngine<T>::~CudaEngine() {
   if (copy_ready_) cudaEventDestroy(copy_ready_);
   if (stream_) cudaStreamDestroy(stream_);
   if (copy_stream_) cudaStreamDestroy(copy_stream_);
+  for (auto st : side_streams_) cudaStreamDestroy(st);
+  for (auto ev : side_done_) cudaEventDestroy(ev);
+  if (fork_) cudaEventDestroy(fork_);
+  if (slide_fork_) cudaEventDestroy(slide_fork_);
+  if (slide_done_) cudaEventDestroy(slide_done_);
+  if (slide_stream_) cudaStreamDestroy(slide_stream_);
 }
 
 template <typename T>
@@ -831,12 +1109,19 @@ void CudaEngine<T>::launch_elements(const Vec3<T>* u, const T* activation, int m
                    std::int32_t(e_)};
   const bool el = setup_.effects.elasticity, hg = setup_.effects.hourglass;
   Vec3<T>* out = mode == 1 ? f_sum_.get() : elem_force_.get();
-  for (const auto& c : collections_) {
+  if (collections_.size() > 1) SINEW_CUDA_CHECK(cudaEventRecord(fork_, s));
+  for (std::size_t ci = 0; ci < collections_.size(); ++ci) {
+    const auto& c = collections_[ci];
+    const cudaStream_t cs = ci == 0 ? s : side_streams_[ci - 1];
+    if (ci > 0) SINEW_CUDA_CHECK(cudaStreamWaitEvent(cs, fork_, 0));
     const auto count = std::int32_t(c.elements.size());
-    const unsigned g = blocks_for(c.elements.size());
+    // Fewer than one block of 256 per SM: blocks of 64, spread over more SMs (shorter per-SM
+    // queues; the element kernel is latency-bound there).
+    const unsigned threads = blocks_for(c.elements.size()) < unsigned(sm_count_) ? 64 : kBlock;
+    const unsigned g = unsigned((c.elements.size() + threads - 1) / threads);
     auto go = [&](auto kernel) {
-      kernel<<<g, kBlock, 0, s>>>(d, c.elements.get(), count, u, activation, out,
-                                  element_energy_.get(), status_.get());
+      kernel<<<g, threads, 0, cs>>>(d, c.elements.get(), count, u, activation, out,
+                                    element_energy_.get(), status_.get());
     };
     // Every effect combination is its own specialised kernel.
 #define SINEW_EK(E, M, H)                    \
@@ -858,11 +1143,16 @@ void CudaEngine<T>::launch_elements(const Vec3<T>* u, const T* activation, int m
     SINEW_EK(false, false, false)
 #undef SINEW_EK
     SINEW_CUDA_LAUNCHED();
+    if (ci > 0) {
+      SINEW_CUDA_CHECK(cudaEventRecord(side_done_[ci - 1], cs));
+      SINEW_CUDA_CHECK(cudaStreamWaitEvent(s, side_done_[ci - 1], 0));
+    }
   }
 }
 
 template <typename T>
-void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, bool blowup_test,
+void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, bool ahead_slide,
+                                bool blowup_test,
                                 std::vector<std::pair<std::string, cudaEvent_t>>* marks) {
   const Vec3<T>* u = buffer(step, 0);
   const Vec3<T>* up = buffer(step, 2);
@@ -876,13 +1166,14 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
     marks->emplace_back(stage, ev);
   };
   mark("start");
-  if (blowup_test) {
-    const unsigned kb = blocks_for(n_);
-    kinetic_kernel<T><<<kb, kBlock, 0, s>>>(std::int32_t(n_), inverse_mass_.get(), u, up, 1.0 / dt_,
-                                            ke_partial_.get());
-    blowup_kernel<<<1, kBlock, 0, s>>>(ke_partial_.get(), int(kb), work_total_.get(), bound_.get(),
-                                       status_.get());
-    mark("kinetic-energy test (every energy_interval steps)");
+  const bool ahead = ahead_slide && slide_node_.size();
+  if (ahead) {  // fork: the lists for this step, from u(n), beside the element and node kernels
+    SINEW_CUDA_CHECK(cudaEventRecord(slide_fork_, s));
+    SINEW_CUDA_CHECK(cudaStreamWaitEvent(slide_stream_, slide_fork_, 0));
+    slide_refresh_kernel<T><<<blocks_for(slide_node_.size()), kBlock, 0, slide_stream_>>>(
+        slide_data(), rest_.get(), u);
+    SINEW_CUDA_LAUNCHED();
+    SINEW_CUDA_CHECK(cudaEventRecord(slide_done_, slide_stream_));
   }
   const T* sc = scalars_.get() + scalars_per_slot_ * std::size_t(slot);
   const bool gather = options_.assembly == ForceAssembly::gather;
@@ -890,71 +1181,36 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
   mark("elements: F, S (+ muscles), forces, hourglass");
   NodeData<T> nd{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
                  std::int32_t(n_)};
-  const unsigned g = blocks_for(n_);
-  const bool grav = setup_.effects.gravity;
-  if (gather && grav)
-    node_kernel<T, true, true>
-        <<<g, kBlock, 0, s>>>(nd, elem_force_.get(), f_sum_.get(), u, up, un, status_.get());
-  else if (gather)
-    node_kernel<T, true, false>
-        <<<g, kBlock, 0, s>>>(nd, elem_force_.get(), f_sum_.get(), u, up, un, status_.get());
-  else if (grav)
-    node_kernel<T, false, true>
-        <<<g, kBlock, 0, s>>>(nd, elem_force_.get(), f_sum_.get(), u, up, un, status_.get());
-  else
-    node_kernel<T, false, false>
-        <<<g, kBlock, 0, s>>>(nd, elem_force_.get(), f_sum_.get(), u, up, un, status_.get());
+  const StepSums sums = step_sums();
+  const ConstraintData<T> program = constraint_data();
+  auto node = [&](auto kernel) {
+    kernel<<<blocks_for(n_), kBlock, 0, s>>>(nd, elem_force_.get(), f_sum_.get(), u, up, un,
+                                             status_.get(), sums, program, node_op_offset_.get(),
+                                             sc + muscles_);
+  };
+  const bool grav = setup_.effects.gravity, prog = program_in_node_;
+  // Every combination is its own specialised kernel.
+#define SINEW_NK(G, W, E, P) \
+  if (gather == G && grav == W && blowup_test == E && prog == P) node(node_kernel<T, G, W, E, P>);
+#define SINEW_NK2(G, W, E) SINEW_NK(G, W, E, true) SINEW_NK(G, W, E, false)
+  SINEW_NK2(true, true, true)
+  SINEW_NK2(true, true, false)
+  SINEW_NK2(true, false, true)
+  SINEW_NK2(true, false, false)
+  SINEW_NK2(false, true, true)
+  SINEW_NK2(false, true, false)
+  SINEW_NK2(false, false, true)
+  SINEW_NK2(false, false, false)
+#undef SINEW_NK2
+#undef SINEW_NK
   SINEW_CUDA_LAUNCHED();
-  mark("nodes: force gather + central-difference update");
-  for (std::size_t k = 0; k < prep_.forces.size(); ++k) {
-    const auto cnt = force_nodes_[k].size();
-    force_kernel<T><<<blocks_for(cnt), kBlock, 0, s>>>(
-        force_nodes_[k].get(), std::int32_t(cnt), inverse_mass_.get(), cd_,
-        to_vec<T>(prep_.forces[k].per_node), sc + muscles_ + k, un);
+  mark(program_in_node_ ? "nodes: force gather + update + loads, constraints, work (+ KE test)"
+                        : "nodes: force gather + central-difference update (+ KE test)");
+  if (!program_in_node_ && con_node_.size()) {
+    if (ahead) SINEW_CUDA_CHECK(cudaStreamWaitEvent(s, slide_done_, 0));  // join
+    launch_constraints(sc + muscles_, true, un, up, s, ahead);
+    mark("loads, sliding, planes, prescribed, rigid + external work");
   }
-  if (!prep_.forces.empty()) mark("nodal forces");
-  if (prescribed_node_all_.size())
-    capture_kernel<T><<<blocks_for(prescribed_node_all_.size()), kBlock, 0, s>>>(
-        prescribed_node_all_.get(), std::int32_t(prescribed_node_all_.size()), un,
-        prescribed_free_.get());
-  if (slide_node_.size())
-    sliding_kernel<T><<<blocks_for(slide_node_.size()), kBlock, 0, s>>>(
-        slide_node_.get(), slide_surface_.get(), slide_distance_.get(), slide_triangle_.get(),
-        std::int32_t(slide_node_.size()), views_.get(), rest_.get(), un);
-  if (slide_node_.size()) mark("sliding");
-  if (plane_nodes_.size())
-    plane_kernel<T><<<blocks_for(plane_nodes_.size()), kBlock, 0, s>>>(
-        plane_nodes_.get(), plane_offset_.get(), plane_normals_.get(),
-        std::int32_t(plane_nodes_.size()), un);
-  for (std::size_t k = 0; k < prep_.prescribed.size(); ++k) {
-    const auto& p = prep_.prescribed[k];
-    prescribe_kernel<T><<<blocks_for(p.nodes.size()), kBlock, 0, s>>>(
-        prescribed_nodes_[k].get(), std::int32_t(p.nodes.size()), to_vec<T>(p.per_node),
-        p.components[0], p.components[1], p.components[2], sc + muscles_ + prep_.forces.size() + k,
-        un);
-  }
-  if (rigid_.size())
-    rigid_kernel<T><<<blocks_for(rigid_.size()), kBlock, 0, s>>>(rigid_.get(),
-                                                                 std::int32_t(rigid_.size()), un);
-  mark("planes, prescribed, rigid");
-  if (work_) {
-    WorkData<T> w{setup_.effects.gravity ? std::int32_t(n_) : 0,
-                  gravity_.get(),
-                  std::int32_t(force_node_all_.size()),
-                  force_node_all_.get(),
-                  force_set_all_.get(),
-                  force_per_node_.get(),
-                  std::int32_t(prescribed_node_all_.size()),
-                  prescribed_node_all_.get(),
-                  prescribed_free_.get(),
-                  inverse_mass_.get(),
-                  double(cd_.a_over_inverse_mass)};
-    const unsigned wb = blocks_for(work_items_);
-    work_kernel<T><<<wb, kBlock, 0, s>>>(w, sc + muscles_, un, up, work_partial_.get());
-    work_total_kernel<<<1, kBlock, 0, s>>>(work_partial_.get(), int(wb), work_total_.get());
-    mark("external work");
-  }
-  SINEW_CUDA_LAUNCHED();
 }
 
 // Per-stage device time of direct (non-graph) steps: events between the stages of launch_step,
@@ -967,7 +1223,7 @@ std::vector<std::pair<std::string, float>> CudaEngine<T>::stage_times(int repeat
   for (int r = 0; r < repeats; ++r) {
     fill_scalars(step_, 1, int(batch_));
     std::vector<std::pair<std::string, cudaEvent_t>> marks;
-    launch_step(step_, int(batch_), stream_, true, &marks);
+    launch_step(step_, int(batch_), stream_, slide_ahead_, true, &marks);
     SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
     if (names.empty()) {
       for (std::size_t k = 1; k < marks.size(); ++k) names.push_back(marks[k].first);
@@ -997,7 +1253,7 @@ void CudaEngine<T>::build_graph() {
   try {
     // Phase 0: the batch starts at a step ≡ 0 (mod align_), a multiple of 3 and of the interval.
     for (int k = 0; k < batch_; ++k)
-      launch_step(k, k, stream_, graph_blowup_ && k % interval_ == 0);
+      launch_step(k, k, stream_, slide_ahead_, graph_blowup_ && k % interval_ == 0);
   } catch (...) {
     cudaStreamEndCapture(stream_, &g);
     if (g) cudaGraphDestroy(g);
@@ -1018,7 +1274,9 @@ void CudaEngine<T>::snapshot() {
   if (slide_triangle_.size())
     SINEW_CUDA_CHECK(cudaMemcpyAsync(snap_triangle_.get(), slide_triangle_.get(),
                                      slide_triangle_.bytes(), cudaMemcpyDeviceToDevice, stream_));
-  snap_work_ = external_work();
+  if (work_acc_.size())
+    SINEW_CUDA_CHECK(cudaMemcpyAsync(snap_work_acc_.get(), work_acc_.get(), work_acc_.bytes(),
+                                     cudaMemcpyDeviceToDevice, stream_));
 }
 
 template <typename T>
@@ -1030,10 +1288,12 @@ void CudaEngine<T>::roll_back() {
   if (slide_triangle_.size())
     SINEW_CUDA_CHECK(cudaMemcpyAsync(slide_triangle_.get(), snap_triangle_.get(),
                                      slide_triangle_.bytes(), cudaMemcpyDeviceToDevice, stream_));
-  SINEW_CUDA_CHECK(cudaMemcpyAsync(work_total_.get(), &snap_work_, sizeof(double),
-                                   cudaMemcpyHostToDevice, stream_));
+  if (work_acc_.size())
+    SINEW_CUDA_CHECK(cudaMemcpyAsync(work_acc_.get(), snap_work_acc_.get(), work_acc_.bytes(),
+                                     cudaMemcpyDeviceToDevice, stream_));
   SINEW_CUDA_CHECK(cudaMemsetAsync(status_.get(), 0, sizeof(Status), stream_));
   if (f_sum_.size()) SINEW_CUDA_CHECK(cudaMemsetAsync(f_sum_.get(), 0, f_sum_.bytes(), stream_));
+  forget_slide_lists(stream_);  // lists are a cache: the full search gives the same triangles
   SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
 }
 
@@ -1054,11 +1314,21 @@ void CudaEngine<T>::upload_vec(Vec3<T>* p, const std::vector<double>& flat) {
 }
 
 template <typename T>
-double CudaEngine<T>::external_work() const {
-  double w = 0;
+double CudaEngine<T>::work_sum(const double* acc) const {
+  double base = 0;
   SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
-  SINEW_CUDA_CHECK(cudaMemcpy(&w, work_total_.get(), sizeof(double), cudaMemcpyDeviceToHost));
-  return w;
+  SINEW_CUDA_CHECK(cudaMemcpy(&base, work_base_.get(), sizeof(double), cudaMemcpyDeviceToHost));
+  if (!work_) return base;
+  std::vector<double> a(n_);
+  SINEW_CUDA_CHECK(cudaMemcpy(a.data(), acc, n_ * sizeof(double), cudaMemcpyDeviceToHost));
+  double w = 0;
+  for (double x : a) w += x;
+  return base + w;
+}
+
+template <typename T>
+double CudaEngine<T>::external_work() const {
+  return work_sum(work_acc_.get());
 }
 
 template <typename T>
@@ -1098,7 +1368,8 @@ void CudaEngine<T>::fail_displacement(const std::vector<Vec3<T>>& un) {
     throw InstabilityError("", "simulation",
                            format("non-finite displacement (NaN/Inf) at step %lld, t = %.6g s: "
                                   "node %zu (rest position (%.6g, %.6g, %.6g) m); "
-                                  "Δt = %.6g s",
+                                  "Δt = %.6g s. Lower the time step (or its safety factor), "
+                                  "or check the loads",
                                   (long long)(step_ + 1), time() + dt_, i, p[0], p[1], p[2], dt_))
         .at(std::int64_t(i));
   }
@@ -1112,7 +1383,7 @@ template <typename T>
 void CudaEngine<T>::run_direct_step() {
   fill_scalars(step_, 1, int(batch_));
   SINEW_CUDA_CHECK(cudaMemsetAsync(status_.get(), 0, sizeof(Status), stream_));
-  launch_step(step_, int(batch_), stream_);
+  launch_step(step_, int(batch_), stream_, false);
   SINEW_CUDA_CHECK(cudaMemcpyAsync(status_host_.get(), status_.get(), sizeof(Status),
                                    cudaMemcpyDeviceToHost, stream_));
   SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
@@ -1125,7 +1396,7 @@ void CudaEngine<T>::run_direct_step() {
   }
   if (step_ % interval_ == 0) {  // the CPU's order: J, then the energy test, then NaN/Inf
     try {
-      check_blowup(snap_work_);
+      check_blowup(work_sum(snap_work_acc_.get()));
     } catch (...) {
       roll_back();
       throw;
@@ -1156,9 +1427,19 @@ void CudaEngine<T>::step(std::int64_t n) {
                                      cudaMemcpyDeviceToHost, stream_));
     SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
     const Status st = *status_host_.get();
-    if (st.bad_jacobian || st.bad_displacement || st.blowup) {
+    if (st.slide_miss && !(st.bad_jacobian || st.bad_displacement || st.blowup) &&
+        ++slide_miss_batches_ >= 2) {
+      // Nodes outrun the lists refreshed ahead (more than s/2 per step): from now on the graph
+      // refreshes inline (grid searches on the step's path again; same results).
+      slide_ahead_ = false;
+      cudaGraphExecDestroy(graph_);
+      graph_ = nullptr;
+      build_graph();
+    }
+    if (st.bad_jacobian || st.bad_displacement || st.blowup || st.slide_miss) {
       // Replay the batch step by step from the snapshot with the CPU's checks at each step: the
-      // failing step throws with the state at the last good step. (A device energy sum that
+      // failing step throws with the state at the last good step. (Direct steps refresh the
+      // sliding lists inline: a slide miss replays to the same results as a run without it.) (A device energy sum that
       // crossed the bound only by its different summation order replays without failing.)
       roll_back();
       for (int k = 0; k < batch_; ++k) {
@@ -1418,8 +1699,10 @@ void CudaEngine<T>::restore(const State& s) {
     SINEW_CUDA_CHECK(cudaMemcpy(slide_triangle_.get(), s.sliding_triangle.data(),
                                 slide_triangle_.bytes(), cudaMemcpyHostToDevice));
   SINEW_CUDA_CHECK(
-      cudaMemcpy(work_total_.get(), &s.external_work, sizeof(double), cudaMemcpyHostToDevice));
+      cudaMemcpy(work_base_.get(), &s.external_work, sizeof(double), cudaMemcpyHostToDevice));
+  if (work_acc_.size()) work_acc_.zero();
   if (f_sum_.size()) f_sum_.zero();
+  forget_slide_lists(stream_);
   SINEW_CUDA_CHECK(cudaDeviceSynchronize());
   initial_energy_ = s.energy_reference;
   update_bound();
@@ -1452,6 +1735,10 @@ std::vector<float> CudaEngine<T>::timed_graph_launches(int launches) {
     throw InstabilityError(
         "", "simulation",
         format("unstable during the timed steps (before step %lld)", (long long)step_));
+  if (status_host_.get()->slide_miss)
+    throw Error("", "sliding",
+                "a sliding node left its candidate list during the timed steps (the timed "
+                "results are not exact); time with a larger sliding_skin");
   return ms;
 }
 
@@ -1471,7 +1758,10 @@ double CudaEngine<T>::bytes_per_step() const {
   if (setup_.effects.gravity) b += double(n_) * 3 * t;
   if (setup_.effects.muscles)
     b += double(prep_.muscle_id.size()) * (4 + t + 3 * t) + double(e_) * 4;
-  b += double(prep_.slide_node.size()) * (4 + 4 + t + 4 + 2 * 3 * t);
+  // Sliding nodes (constraint program, listed path): node id, offsets, op, surface, rest distance,
+  // triangle read + written, list count, anchor, u(n+1) read + written, rest, ≈ 4 listed ids (the
+  // listed triangles' corners come from L2 and are not counted).
+  b += double(prep_.slide_node.size()) * (4 + 4 + 4 + 4 + t + 8 + 4 + 3 * t + 6 * t + 3 * t + 16);
   return b;
 }
 

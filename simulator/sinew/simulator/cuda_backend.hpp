@@ -27,6 +27,11 @@ struct CudaOptions {
   // status flags are read once per graph launch.
   int graph_steps = 96;
   int device = 0;
+  // Skin s of the sliding nodes' candidate lists, in grid cells of the surface (about mean edges):
+  // a node tests only its listed triangles (those within d1 + 2 s of where it last searched) until
+  // it moves more than s, then searches the grid again. Exact for any s > 0; larger: longer lists,
+  // rarer searches (docs/cuda-backend.md, Sliding).
+  double sliding_skin = 0.05;
 };
 
 // True when the CUDA runtime sees at least one device (false when built without CUDA).

@@ -512,7 +512,8 @@ void CpuEngine<T>::single_step() {
           "", "simulation",
           fmt::format("non-finite displacement (NaN/Inf) at step {}, t = {:.6g} s: "
                       "node {} (rest position ({:.6g}, {:.6g}, {:.6g}) m); "
-                      "Δt = {:.6g} s",
+                      "Δt = {:.6g} s. Lower the time step (or its safety factor), or check "
+                      "the loads",
                       step_ + 1, t + dt_, i, p[0], p[1], p[2], dt_))
           .at(std::int64_t(i));
     }

@@ -71,6 +71,10 @@ struct Plan {
   std::string explain() const;  // the printable plan (sinew-simulate --explain)
 };
 
+// A time step above this share of h/c (the critical estimate) gets a plan warning: one-point
+// hexahedra with lumped mass are stable only to about 0.85 h/c at ν = 0.49 (time_step.hpp).
+inline constexpr double kSafeCourantShare = 0.8;
+
 // Throws ConfigError (file "", field = the Setup field, e.g. "time_step.user_dt") on bad input:
 // ids out of range, Δt above the estimate without `forced`, non-positive duration, densities ≤ 0 …
 Plan make_plan(const formats::Model& model, const Setup& setup);

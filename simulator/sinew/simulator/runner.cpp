@@ -81,6 +81,15 @@ std::string device_text(const std::string& backend, int threads) {
   return fmt::format("{} (OpenMP, {} thread{})", backend, threads, threads == 1 ? "" : "s");
 }
 
+std::string hourglass_warning(const Energies& e) {
+  return fmt::format(
+      "hourglass energy is {:.0f}% of the strain energy at t = {:.6g} s (step {}): above {:.0f}% "
+      "the mesh may be folding in hourglass modes that no Jacobian check sees; refine the model, "
+      "raise hourglass.kappa, or use hourglass.modulus p_wave where bending does not matter "
+      "(docs/stability.md)",
+      100.0 * e.hourglass / e.strain, e.time, e.step, 100.0 * kHourglassWarningShare);
+}
+
 }  // namespace
 
 void install_interrupt_handlers() {
@@ -266,6 +275,7 @@ RunResult run_scene(const RunOptions& options) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     write_run_summary(summary_path, summary);
   };
+  bool hourglass_warned = false;
   const auto write_frame = [&] {
     const auto u = backend->displacements();
     const ElementFields fields = want_fields ? backend->element_fields() : ElementFields{};
@@ -273,6 +283,13 @@ RunResult run_scene(const RunOptions& options) {
     auto e = backend->energies();
     e.time /= s;  // the summary speaks scene time throughout
     summary.energies.push_back(e);
+    // One-point elements can fold into hourglass modes that the centre Jacobian does not see
+    // (docs/stability.md); explicit codes (LS-DYNA, Abaqus) flag this share of the internal energy.
+    if (!hourglass_warned && e.hourglass > kHourglassWarningShare * e.strain && e.strain > 0) {
+      hourglass_warned = true;
+      summary.warnings.push_back(hourglass_warning(e));
+      log::warn("{}", summary.warnings.back());
+    }
   };
   const auto write_row = [&] {
     if (probes->empty()) return;

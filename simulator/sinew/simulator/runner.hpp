@@ -42,6 +42,13 @@ struct RunResult {
   bool ran = false;  // false when only the plan was printed
 };
 
+// The hourglass warning: at an output frame where the hourglass energy exceeds this share of the
+// strain energy, the run logs one warning and lists it in run_summary.json's `warnings` (the
+// usual 10% rule of explicit codes such as LS-DYNA). One-point elements can then be folded into
+// hourglass patterns that no Jacobian check sees (docs/stability.md): refine, raise
+// hourglass.kappa, or use modulus p_wave where bending does not matter.
+inline constexpr double kHourglassWarningShare = 0.10;
+
 // Runs (or explains) a scene. Throws ConfigError / FormatError / IoError / ResourceError before
 // the loop starts. An instability during the loop is written to the summary (status "unstable")
 // with every frame so far intact, and then rethrown as InstabilityError. SIGINT/SIGTERM during the

@@ -145,13 +145,37 @@ SINEW_HD_INLINE T triangle_distance2(const SurfaceView<T>& s, std::int32_t t, co
   return squared_norm(x - p);
 }
 
-// Closest point of the surface to x; `triangle` in: warm start (or −1), out: closest triangle.
+// Up to kEntryGroup consecutive entries [g, min(g + kEntryGroup, end)) of a cell list: corners and
+// triangle ids (−1 past the end), read before any is used, so a GPU thread has all their loads in
+// flight at once instead of one entry's latency after another.
+constexpr int kEntryGroup = 4;
 template <typename T>
-SINEW_HD_INLINE Vec3<T> closest_surface_point(const SurfaceView<T>& s, const Vec3<T>& x,
-                                              std::int32_t& triangle) {
+struct CellEntryGroup {
+  Vec3<T> v[kEntryGroup][3];
+  std::int32_t t[kEntryGroup];
+};
+template <typename T>
+SINEW_HD_INLINE void load_cell_entries(const SurfaceView<T>& s, std::int32_t g, std::int32_t end,
+                                       CellEntryGroup<T>& e) {
+  for (int m = 0; m < kEntryGroup; ++m) {
+    const bool in = g + m < end;
+    const std::int32_t q = in ? g + m : g;
+    e.t[m] = in ? s.cell_triangles[q] : -1;
+    for (int c = 0; c < 3; ++c) e.v[m][c] = s.entry_corners[3 * q + c];
+  }
+}
+
+// Closest point of the surface to x; `triangle` in: warm start (or −1), out: closest triangle.
+// Among triangles at exactly the same distance the warm start wins, then (kLowestIdTies false) the
+// first met in cell order, or (kLowestIdTies true) the lowest triangle id: a rule that does not
+// depend on the order of visiting, so the candidate-list query below gives the same triangle.
+template <typename T, bool kLowestIdTies>
+SINEW_HD_INLINE Vec3<T> closest_surface_search(const SurfaceView<T>& s, const Vec3<T>& x,
+                                               std::int32_t& triangle) {
   Vec3<T> best_p{T(0), T(0), T(0)};
   T best = T(0);
   std::int32_t best_t = -1;
+  const std::int32_t warm = triangle >= 0 && triangle < s.triangle_count ? triangle : 0;
   if (triangle >= 0 && triangle < s.triangle_count) {
     best = triangle_distance2(s, triangle, x, best_p);
     best_t = triangle;
@@ -166,8 +190,10 @@ SINEW_HD_INLINE Vec3<T> closest_surface_point(const SurfaceView<T>& s, const Vec
     const T dmax = T(s.dims[k]);
     T a = (x[k] - r - s.origin[k]) / s.cell;
     T b = (x[k] + r - s.origin[k]) / s.cell;
-    a = a < T(0) ? T(0) : (a > dmax ? dmax : a);  // dims: empty range
-    b = b < T(0) ? T(-1) : (b > dmax - T(1) ? dmax - T(1) : b);
+    // Written so that NaN (a diverging node, reported at the next sync point) gives the empty
+    // range [0, −1]: converting NaN to an integer is undefined (INT_MIN on the GPU).
+    a = a >= T(0) ? (a <= dmax ? a : dmax) : T(0);  // dims: empty range
+    b = b >= T(0) ? (b <= dmax - T(1) ? b : dmax - T(1)) : T(-1);
     const std::int32_t l = static_cast<std::int32_t>(a);
     const std::int32_t h = static_cast<std::int32_t>(b);
     lo[k] = l;
@@ -190,25 +216,144 @@ SINEW_HD_INLINE Vec3<T> closest_surface_point(const SurfaceView<T>& s, const Vec
         if (gz * gz + gy * gy + gx * gx > best) continue;
         const std::int32_t c = (k * s.dims[1] + j) * s.dims[0] + i;
         // The cell's content box: skip a cell whose triangles cannot reach below the best so far.
-        if (box_distance2(x, s.cell_boxes[2 * c], s.cell_boxes[2 * c + 1]) > best) continue;
-        for (std::int32_t q = s.cell_offsets[c]; q < s.cell_offsets[c + 1]; ++q) {
-          // One read per entry (its corners; the id alongside): the box bound first, then the
-          // exact test on the same registers, so a divergent exact test costs no further loads.
-          const Vec3<T> va = s.entry_corners[3 * q], vb = s.entry_corners[3 * q + 1],
-                        vc = s.entry_corners[3 * q + 2];
-          const std::int32_t t = s.cell_triangles[q];
-          Vec3<T> bl, bh;
-          triangle_box(va, vb, vc, bl, bh);
-          if (box_distance2(x, bl, bh) > best) continue;
-          if (t == best_t) continue;
-          const Vec3<T> p = physics::closest_point_on_triangle(x, va, vb, vc);
-          const T d = squared_norm(x - p);
-          if (d < best) {
-            best = d;
-            best_p = p;
-            best_t = t;
+        // (Its list range is read alongside: independent loads in flight together.)
+        const Vec3<T> cl = s.cell_boxes[2 * c], ch = s.cell_boxes[2 * c + 1];
+        const std::int32_t q0 = s.cell_offsets[c], q1 = s.cell_offsets[c + 1];
+        if (box_distance2(x, cl, ch) > best) continue;
+        // Entries in groups (cell_entry_group): each entry's corners and id are one read, the box
+        // bound first, then the exact test on the same registers, entries in list order.
+        for (std::int32_t g = q0; g < q1; g += kEntryGroup) {
+          CellEntryGroup<T> e;
+          load_cell_entries(s, g, q1, e);
+          for (int m = 0; m < kEntryGroup; ++m) {
+            const std::int32_t t = e.t[m];
+            if (t < 0) continue;
+            Vec3<T> bl, bh;
+            triangle_box(e.v[m][0], e.v[m][1], e.v[m][2], bl, bh);
+            if (box_distance2(x, bl, bh) > best) continue;
+            if (t == best_t) continue;
+            const Vec3<T> p =
+                physics::closest_point_on_triangle(x, e.v[m][0], e.v[m][1], e.v[m][2]);
+            const T d = squared_norm(x - p);
+            if (d < best || (kLowestIdTies && d == best && best_t != warm && t < best_t)) {
+              best = d;
+              best_p = p;
+              best_t = t;
+            }
           }
         }
+      }
+    }
+  }
+  triangle = best_t;
+  return best_p;
+}
+
+template <typename T>
+SINEW_HD_INLINE Vec3<T> closest_surface_point(const SurfaceView<T>& s, const Vec3<T>& x,
+                                              std::int32_t& triangle) {
+  return closest_surface_search<T, false>(s, x, triangle);
+}
+
+// Candidate lists (Verlet lists with a skin, exact): after a full search at x_s with closest
+// distance d1, list every triangle within d1 + 2 s of x_s. While the node stays within s of x_s,
+// its closest triangle is in the list: for |x − x_s| ≤ s, the closest triangle T* at x has
+// dist(x, T*) ≤ dist(x, T1) ≤ d1 + s, so dist(x_s, T*) ≤ d1 + 2 s. Only the listed triangles are
+// then tested, with the lowest-id tie rule of closest_surface_search<T, true> (warm start first),
+// so both paths return the same triangle. The move test uses s (1 − 1e-3): the margin covers float
+// round-off in the listed distances (s is a fraction of a cell, far above it).
+
+// Per triangle its three corners (3 per triangle), in the query's scalar, for the listed tests.
+template <typename T>
+std::vector<Vec3<T>> triangle_corner_list(
+    const std::vector<Vec3<T>>& vertices,
+    const std::vector<std::array<std::int32_t, 3>>& triangles) {
+  std::vector<Vec3<T>> c(3 * triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (std::size_t k = 0; k < 3; ++k) c[3 * t + k] = vertices[std::size_t(triangles[t][k])];
+  return c;
+}
+
+// Every triangle within `radius` of x into list[j · stride], j < capacity, each once, in cell
+// order; returns their count, or −1 when more than `capacity` (no list: the node searches fully).
+template <typename T>
+SINEW_HD_INLINE std::int32_t collect_surface_candidates(const SurfaceView<T>& s, const Vec3<T>& x,
+                                                        T radius, std::int32_t* list,
+                                                        std::int64_t stride,
+                                                        std::int32_t capacity) {
+  const T r2 = radius * radius;
+  std::int32_t lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) {
+    const T dmax = T(s.dims[k]);
+    T a = (x[k] - radius - s.origin[k]) / s.cell;
+    T b = (x[k] + radius - s.origin[k]) / s.cell;
+    a = a >= T(0) ? (a <= dmax ? a : dmax) : T(0);  // NaN: empty range, as above
+    b = b >= T(0) ? (b <= dmax - T(1) ? b : dmax - T(1)) : T(-1);
+    lo[k] = static_cast<std::int32_t>(a);
+    hi[k] = static_cast<std::int32_t>(b);
+  }
+  std::int32_t count = 0;
+  for (std::int32_t k = lo[2]; k <= hi[2]; ++k)
+    for (std::int32_t j = lo[1]; j <= hi[1]; ++j)
+      for (std::int32_t i = lo[0]; i <= hi[0]; ++i) {
+        const std::int32_t c = (k * s.dims[1] + j) * s.dims[0] + i;
+        const Vec3<T> cl = s.cell_boxes[2 * c], ch = s.cell_boxes[2 * c + 1];
+        const std::int32_t q0 = s.cell_offsets[c], q1 = s.cell_offsets[c + 1];
+        if (box_distance2(x, cl, ch) > r2) continue;
+        for (std::int32_t g = q0; g < q1; g += kEntryGroup) {
+          CellEntryGroup<T> e;
+          load_cell_entries(s, g, q1, e);
+          for (int m = 0; m < kEntryGroup; ++m) {
+            const std::int32_t t = e.t[m];
+            if (t < 0) continue;
+            Vec3<T> bl, bh;
+            triangle_box(e.v[m][0], e.v[m][1], e.v[m][2], bl, bh);
+            if (box_distance2(x, bl, bh) > r2) continue;
+            const Vec3<T> p =
+                physics::closest_point_on_triangle(x, e.v[m][0], e.v[m][1], e.v[m][2]);
+            if (squared_norm(x - p) > r2) continue;
+            bool seen = false;
+            for (std::int32_t n = 0; n < count && !seen; ++n) seen = list[n * stride] == t;
+            if (seen) continue;
+            if (count == capacity) return -1;
+            list[count * stride] = t;
+            ++count;
+          }
+        }
+      }
+  return count;
+}
+
+// Closest point of the listed triangles (count ≥ 1) to x, with the rule of
+// closest_surface_search<T, true>: strictly closer wins; on equal distance the warm start, then
+// the lowest id. `triangle` in: warm start, out: closest triangle. corners: triangle_corner_list.
+template <typename T>
+SINEW_HD_INLINE Vec3<T> closest_listed_point(const Vec3<T>* corners, const std::int32_t* list,
+                                             std::int64_t stride, std::int32_t count,
+                                             const Vec3<T>& x, std::int32_t& triangle) {
+  const std::int32_t warm = triangle;
+  Vec3<T> best_p{T(0), T(0), T(0)};
+  T best = T(0);
+  std::int32_t best_t = -1;
+  // Two entries at a time: their ids, then their corners, are independent loads in flight
+  // together (a GPU thread otherwise waits one list → corners latency per entry; four at a time
+  // spilled registers in the CUDA constraint kernel).
+  constexpr int kGroup = 2;
+  for (std::int32_t m0 = 0; m0 < count; m0 += kGroup) {
+    std::int32_t ts[kGroup];
+    for (int j = 0; j < kGroup; ++j) ts[j] = m0 + j < count ? list[(m0 + j) * stride] : -1;
+    Vec3<T> c[kGroup][3];
+    for (int j = 0; j < kGroup; ++j)
+      for (int v = 0; v < 3; ++v) c[j][v] = ts[j] >= 0 ? corners[3 * ts[j] + v] : x;
+    for (int j = 0; j < kGroup; ++j) {
+      const std::int32_t t = ts[j];
+      if (t < 0) continue;
+      const Vec3<T> p = physics::closest_point_on_triangle(x, c[j][0], c[j][1], c[j][2]);
+      const T d = squared_norm(x - p);
+      if (best_t < 0 || d < best || (d == best && best_t != warm && (t == warm || t < best_t))) {
+        best = d;
+        best_p = p;
+        best_t = t;
       }
     }
   }
