@@ -260,7 +260,10 @@ TEST(Forehead, TwoMillimetreSpecVoxelizesWithMusclesTendonSlidingAndRigidNodes) 
                                  [](const auto& s) { return s.name == "skin"; });
   ASSERT_NE(skin, model.surfaces.end());
   EXPECT_EQ(skin->vertices.size(), meshes().skin_surface.vertices.size());
-  EXPECT_EQ(r.summary.embedding_outside, 0);
+  // min_fraction drops voxels less than 1 % full; skin vertices in such a sliver are bound to the
+  // nearest kept element, which must lie within a tenth of a voxel (a sliver is that thin).
+  EXPECT_LT(double(r.summary.embedding_outside), 0.02 * double(skin->vertices.size()));
+  EXPECT_LT(r.summary.embedding_max_outside_distance, 0.12 * h);
 }
 
 TEST(Forehead, FinerSpecsReadTheSameMeshes) {
