@@ -102,6 +102,48 @@ inline std::vector<Index> nodes_at(const formats::Model& m, int axis, int value)
     if (m.node_lattice[n][std::size_t(axis)] == value) out.push_back(Index(n));
   return out;
 }
+// The bending case of physics-notes §3: a cantilever of 20 × 2 × 2 cubes of side h, clamped at
+// x = 0 (rigid nodes), a small tip load P spread over its end face (nodal forces; tip deflection
+// ≈ 3e-5 L, small strain), damped critically for the first bending mode (ω1 = 1.875² √(EI/(ρA))/L²).
+// reference: Euler–Bernoulli P L³/(3EI) plus Timoshenko shear P L/(κ_s μ A), κ_s = 5/6, m.
+struct Cantilever {
+  formats::Model model;
+  Setup setup;
+  std::vector<Index> tip_nodes;
+  double reference = 0;  // m, tip deflection
+  double omega1 = 0;     // 1/s, first bending mode
+};
+inline Cantilever make_cantilever(double mu, double nu, double rho, double h,
+                                  HourglassModulus modulus) {
+  const int nx = 20, nt = 2;
+  const auto mat = neo_hookean(mu, nu, rho);
+  Cantilever c;
+  c.model = block(nx, nt, nt, h, mat);
+  Setup& s = c.setup;
+  s.effects.damping = true;
+  s.effects.loads = true;
+  s.hourglass.modulus = modulus;
+  s.rigid_nodes = nodes_at(c.model, 0, 0);
+  NodalForce f;
+  f.nodes = nodes_at(c.model, 0, nx);
+  const double l = nx * h, t = nt * h, e = mat.youngs_modulus, inertia = t * t * t * t / 12;
+  const double p = 1e-4 * e * inertia / (l * l);
+  f.total = {0, 0, -p};
+  s.forces.push_back(f);
+  c.tip_nodes = f.nodes;
+  c.omega1 = 1.875 * 1.875 * std::sqrt(e * inertia / (rho * t * t)) / (l * l);
+  s.damping_alpha = 2 * c.omega1;
+  c.reference = p * l * l * l / (3 * e * inertia) + p * l / (mu * t * t * 5.0 / 6);
+  return c;
+}
+// Mean downward displacement of the given nodes, m.
+inline double mean_drop(const Backend& b, const std::vector<Index>& nodes) {
+  const auto u = b.displacements();
+  double tip = 0;
+  for (auto n : nodes) tip -= u[3 * std::size_t(n) + 2];
+  return tip / double(nodes.size());
+}
+
 inline std::vector<Index> nodes_if(const formats::Model& m,
                                    const std::function<bool(const formats::Lattice&)>& pred) {
   std::vector<Index> out;

@@ -159,23 +159,9 @@ struct Bending {
   std::int64_t steps = 0;
 };
 Bending cantilever(const BackendFactory& make, double nu, HourglassModulus modulus) {
-  const int nx = 20, nt = 2;
-  const auto mat = neo_hookean(kMu, nu, kRho);
-  const auto model = block(nx, nt, nt, kH, mat);
-  SimSetup s;
-  s.effects.damping = true;
-  s.effects.loads = true;
-  s.hourglass.modulus = modulus;
-  s.rigid_nodes = nodes_at(model, 0, 0);
-  NodalForce f;
-  f.nodes = nodes_at(model, 0, nx);
-  const double l = nx * kH, t = nt * kH, e = mat.youngs_modulus, inertia = t * t * t * t / 12;
-  const double p = 1e-4 * e * inertia / (l * l);  // tip deflection ≈ 3e-5 L: small strain
-  f.total = {0, 0, -p};
-  s.forces.push_back(f);
-  const double omega1 = 1.875 * 1.875 * std::sqrt(e * inertia / (kRho * t * t)) / (l * l);
-  s.damping_alpha = 2 * omega1;  // critical for the first bending mode
-  auto b = make(model, s);
+  const Cantilever c = make_cantilever(kMu, nu, kRho, kH, modulus);
+  const double omega1 = c.omega1;
+  auto b = make(c.model, c.setup);
   Bending out;
   WorkBound bound;
   double prev = 0, tip = 0;
@@ -186,16 +172,12 @@ Bending cantilever(const BackendFactory& make, double nu, HourglassModulus modul
   for (int it = 0; it < 2000; ++it) {
     b->step(batch);
     bound.sample(b->energies());
-    const auto u = b->displacements();
-    tip = 0;
-    for (auto nd : f.nodes) tip -= u[3 * std::size_t(nd) + 2];
-    tip /= double(f.nodes.size());
+    tip = mean_drop(*b, c.tip_nodes);
     if (it > 2 && std::abs(tip - prev) * left_factor < 1e-5 * std::abs(tip)) break;
     prev = tip;
   }
   const auto en = b->energies();
-  const double reference = p * l * l * l / (3 * e * inertia) + p * l / (kMu * t * t * 5.0 / 6);
-  out.ratio = tip / reference;
+  out.ratio = tip / c.reference;
   out.worst_excess = bound.worst;
   out.strain_over_work = (en.strain + en.hourglass) / en.external_work;
   out.steps = b->step_index();
