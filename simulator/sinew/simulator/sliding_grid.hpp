@@ -165,6 +165,23 @@ SINEW_HD_INLINE void load_cell_entries(const SurfaceView<T>& s, std::int32_t g, 
   }
 }
 
+// The grid cells [lo, hi] (inclusive, per axis) that the cube of half-side r around x touches,
+// clipped to the grid. NaN in x or r (a diverging node, reported at the next sync point) gives the
+// empty range [0, −1]: converting NaN to an integer is undefined (INT_MIN on the GPU).
+template <typename T>
+SINEW_HD_INLINE void cells_within(const SurfaceView<T>& s, const Vec3<T>& x, T r,
+                                  std::int32_t lo[3], std::int32_t hi[3]) {
+  for (int k = 0; k < 3; ++k) {
+    const T dmax = T(s.dims[k]);
+    T a = (x[k] - r - s.origin[k]) / s.cell;
+    T b = (x[k] + r - s.origin[k]) / s.cell;
+    a = a >= T(0) ? (a <= dmax ? a : dmax) : T(0);  // beyond the grid: empty range
+    b = b >= T(0) ? (b <= dmax - T(1) ? b : dmax - T(1)) : T(-1);
+    lo[k] = static_cast<std::int32_t>(a);
+    hi[k] = static_cast<std::int32_t>(b);
+  }
+}
+
 // Closest point of the surface to x; `triangle` in: warm start (or −1), out: closest triangle.
 // Among triangles at exactly the same distance the warm start wins, then (kLowestIdTies false) the
 // first met in cell order, or (kLowestIdTies true) the lowest triangle id: a rule that does not
@@ -184,21 +201,8 @@ SINEW_HD_INLINE Vec3<T> closest_surface_search(const SurfaceView<T>& s, const Ve
     best = triangle_distance2(s, 0, x, best_p);
     best_t = 0;
   }
-  const T r = std::sqrt(best);
   std::int32_t lo[3], hi[3];
-  for (int k = 0; k < 3; ++k) {
-    const T dmax = T(s.dims[k]);
-    T a = (x[k] - r - s.origin[k]) / s.cell;
-    T b = (x[k] + r - s.origin[k]) / s.cell;
-    // Written so that NaN (a diverging node, reported at the next sync point) gives the empty
-    // range [0, −1]: converting NaN to an integer is undefined (INT_MIN on the GPU).
-    a = a >= T(0) ? (a <= dmax ? a : dmax) : T(0);  // dims: empty range
-    b = b >= T(0) ? (b <= dmax - T(1) ? b : dmax - T(1)) : T(-1);
-    const std::int32_t l = static_cast<std::int32_t>(a);
-    const std::int32_t h = static_cast<std::int32_t>(b);
-    lo[k] = l;
-    hi[k] = h;
-  }
+  cells_within(s, x, std::sqrt(best), lo, hi);
   // Cells farther from x than the best distance so far cannot hold a closer triangle.
   auto axis_gap = [&](int axis, std::int32_t idx) {
     const T c0 = s.origin[axis] + T(idx) * s.cell;
@@ -283,15 +287,7 @@ SINEW_HD_INLINE std::int32_t collect_surface_candidates(const SurfaceView<T>& s,
                                                         std::int32_t capacity) {
   const T r2 = radius * radius;
   std::int32_t lo[3], hi[3];
-  for (int k = 0; k < 3; ++k) {
-    const T dmax = T(s.dims[k]);
-    T a = (x[k] - radius - s.origin[k]) / s.cell;
-    T b = (x[k] + radius - s.origin[k]) / s.cell;
-    a = a >= T(0) ? (a <= dmax ? a : dmax) : T(0);  // NaN: empty range, as above
-    b = b >= T(0) ? (b <= dmax - T(1) ? b : dmax - T(1)) : T(-1);
-    lo[k] = static_cast<std::int32_t>(a);
-    hi[k] = static_cast<std::int32_t>(b);
-  }
+  cells_within(s, x, radius, lo, hi);
   std::int32_t count = 0;
   for (std::int32_t k = lo[2]; k <= hi[2]; ++k)
     for (std::int32_t j = lo[1]; j <= hi[1]; ++j)
