@@ -1,9 +1,9 @@
 // CUDA backend benchmark on the three Table-2-sized models (Warburton & Maddock 2013, GTX 680):
 // ms per step (CUDA events around graph launches, warm-up, median), element-steps per second,
 // achieved bandwidth against a measured device-to-device copy, stage shares from variants that
-// leave one stage out, float/double, gather/atomic, and the CPU backend on the same machine. Usage:
+// leave one stage out, float/double, gather/atomic/tiled assembly, and the CPU backend on the same machine. Usage:
 // cuda_bench [--quick] [--only NAME] [--profile]. quick: fewer launches, for checking the program;
-// only: the models whose name contains NAME; profile: float gather only, 3 launches after one
+// only: the models whose name contains NAME; profile: float, default assembly only, 3 launches after one
 // warm-up, nothing else (for ncu).
 #include <algorithm>
 #include <chrono>
@@ -77,6 +77,15 @@ Case soft_body() {
   return c;
 }
 
+const ForceAssembly kDefault = CudaOptions{}.assembly;
+
+const char* assembly_name(ForceAssembly a) {
+  return a == ForceAssembly::gather   ? "gather"
+         : a == ForceAssembly::atomic ? "atomic"
+         : a == ForceAssembly::tiled  ? "tiled"
+                                      : "automatic";
+}
+
 double median(std::vector<float> v) {
   std::sort(v.begin(), v.end());
   return double(v[v.size() / 2]);
@@ -141,23 +150,32 @@ int main(int argc, char** argv) {
     std::printf("== %s: %zu elements, %zu nodes, %zu sliding nodes\n", c.name.c_str(),
                 c.model.element_count(), c.model.node_count(),
                 c.setup.effects.sliding ? c.model.sliding.size() : std::size_t(0));
+    // What the default (automatic) assembly resolves to on this model: the base of the shares.
+    ForceAssembly chosen = kDefault;
+    try {
+      auto b = make_cuda_backend(c.model, c.setup);
+      chosen = dynamic_cast<CudaTiming*>(b.get())->assembly();
+    } catch (const std::exception& ex) {
+      std::printf("  (failed: %s)\n", ex.what());
+    }
+    std::printf("  default assembly (%s) here: %s\n", assembly_name(kDefault),
+                assembly_name(chosen));
     Timing base{};
     for (Precision p : {Precision::float32, Precision::float64})
-      for (ForceAssembly a : {ForceAssembly::gather, ForceAssembly::atomic}) {
-        if (profile && (p != Precision::float32 || a != ForceAssembly::gather)) continue;
+      for (ForceAssembly a : {ForceAssembly::gather, ForceAssembly::atomic, ForceAssembly::tiled}) {
+        if (profile && (p != Precision::float32 || a != chosen)) continue;
         Setup s = c.setup;
         s.precision = p;
         const Timing t = time_gpu(c, s, a, launches);
-        if (p == Precision::float32 && a == ForceAssembly::gather) base = t;
+        if (p == Precision::float32 && a == chosen) base = t;
         const double bw = t.bytes_per_step / (t.ms_per_step * 1e-3);
         std::printf(
             "  %-6s %-6s %9.4f ms/step  %7.2f G element-steps/s  %6.0f GB/s (%4.1f%% of copy)\n",
-            p == Precision::float32 ? "float" : "double",
-            a == ForceAssembly::gather ? "gather" : "atomic", t.ms_per_step,
+            p == Precision::float32 ? "float" : "double", assembly_name(a), t.ms_per_step,
             e / (t.ms_per_step * 1e-3) / 1e9, bw / 1e9, 100 * bw / copy_bw);
       }
     if (profile) continue;
-    // Stage shares: leave one stage out (float, gather).
+    // Stage shares: leave one stage out (float, default assembly).
     struct Variant {
       const char* stage;
       std::function<void(Setup&)> off;
@@ -173,25 +191,36 @@ int main(int argc, char** argv) {
       variants.push_back({"gravity", [](Setup& s) { s.effects.gravity = false; }});
     if (c.setup.effects.loads)
       variants.push_back({"loads", [](Setup& s) { s.effects.loads = false; }});
-    if (c.setup.effects.sliding)
-      for (double skin : {0.02, 0.1, 0.25}) {  // the default, 0.05, is `base`
-        CudaOptions o;
-        o.sliding_skin = skin;
-        Setup s = c.setup;
-        s.precision = Precision::float32;
-        const Timing t = time_gpu(c, s, ForceAssembly::gather, launches, o);
-        std::printf("  sliding skin %.2f cells (default 0.05)%28s %9.4f ms/step\n", skin, "",
-                    t.ms_per_step);
-      }
+    // Float ms per step with one CUDA option changed (label: what was changed).
+    auto with_option = [&](const std::string& label, ForceAssembly a,
+                           const std::function<void(CudaOptions&)>& set) {
+      CudaOptions o;
+      set(o);
+      Setup s = c.setup;
+      s.precision = Precision::float32;
+      const Timing t = time_gpu(c, s, a, launches, o);
+      std::printf("  %-66s %9.4f ms/step\n", label.c_str(), t.ms_per_step);
+    };
+    if (c.setup.effects.sliding) {
+      for (double skin : {0.02, 0.1, 0.25})  // the default, 0.05, is `base`
+        with_option("sliding skin " + std::to_string(skin).substr(0, 4) + " cells (default 0.05)",
+                    kDefault, [&](CudaOptions& o) { o.sliding_skin = skin; });
+      for (int every : {1, 2, 8})  // the default, 4, is `base`
+        with_option("sliding lists refreshed every " + std::to_string(every) + " steps (default 4)",
+                    kDefault, [&](CudaOptions& o) { o.sliding_refresh_interval = every; });
+    }
+    for (int tps : {1, 2, 4, 6})  // tiled: the default, 3 tiles per SM, is `base` when tiled
+      with_option("tiled, " + std::to_string(tps) + " tiles per SM (default 3)",
+                  ForceAssembly::tiled, [&](CudaOptions& o) { o.tiles_per_sm = tps; });
     for (const auto& v : variants) {
       Setup s = c.setup;
       s.precision = Precision::float32;
       v.off(s);
-      const Timing t = time_gpu(c, s, ForceAssembly::gather, launches);
+      const Timing t = time_gpu(c, s, kDefault, launches);
       std::printf("  without %-58s %9.4f ms/step  share %5.1f%%\n", v.stage, t.ms_per_step,
                   100 * (base.ms_per_step - t.ms_per_step) / base.ms_per_step);
     }
-    // Per-stage device time (float, gather): events between the stages of single steps.
+    // Per-stage device time (float, default assembly): events between the stages of single steps.
     try {
       Setup s = c.setup;
       s.precision = Precision::float32;
@@ -226,15 +255,17 @@ int main(int argc, char** argv) {
       std::printf("  CPU backend failed: %s\n", ex.what());
     }
     char line[512];
-    std::snprintf(line, sizeof line, "| %s | %.0f | %.0f | %.3g | %.2f | %.4f | %.0fx | %.2f |",
-                  c.name.c_str(), n, e, base.dt * 1e3, c.paper_ms, base.ms_per_step,
+    std::snprintf(line, sizeof line,
+                  "| %s | %.0f | %.0f | %.3g | %.2f | %.4f (%s) | %.0fx | %.2f |", c.name.c_str(),
+                  n, e, base.dt * 1e3, c.paper_ms, base.ms_per_step, assembly_name(chosen),
                   c.paper_ms / base.ms_per_step, base.dt / (base.ms_per_step * 1e-3));
     summary.push_back(line);
     std::printf("\n");
   }
   std::printf(
       "| model | nodes | elements | dt (ms) | paper ms/step (GTX 680) | ours ms/step (float, "
-      "gather) | ratio | simulated s per wall s |\n");
+      "%s) | ratio | simulated s per wall s |\n",
+      assembly_name(kDefault));
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const auto& l : summary) std::printf("%s\n", l.c_str());
   return 0;

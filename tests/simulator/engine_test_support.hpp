@@ -60,12 +60,20 @@ inline std::string backend_name(const ::testing::TestParamInfo<NamedBackend>& in
 }
 
 // Every backend built here: the CPU, and the CUDA backend where it is compiled (its cases skip with
-// "no CUDA device" where there is none, e.g. in CI, so they show as skipped).
+// "no CUDA device" where there is none, e.g. in CI, so they show as skipped): once with its default
+// assembly (automatic: gather on most test models) and once with tiled assembly forced.
 inline const std::vector<NamedBackend>& every_backend() {
   static const std::vector<NamedBackend> backends = {
       {"cpu", &make_cpu_backend, nullptr, ""},
 #ifdef SINEW_CUDA_ENABLED
       {"cuda", [](const formats::Model& m, const Setup& s) { return make_cuda_backend(m, s); },
+       &cuda_device_available, "no CUDA device"},
+      {"cuda_tiled",
+       [](const formats::Model& m, const Setup& s) {
+         CudaOptions o;
+         o.assembly = ForceAssembly::tiled;
+         return make_cuda_backend(m, s, o);
+       },
        &cuda_device_available, "no CUDA device"},
 #endif
   };

@@ -153,7 +153,7 @@ TEST(Runner, ResumedRunIsBitIdenticalToAnUninterruptedOne) {
   EXPECT_NE(read_file(dir / "full/probe_tip.csv").find("\n0.29"), std::string::npos);
 }
 
-// The same on the CUDA backend (its default gather assembly is deterministic), where a device is.
+// The same on the CUDA backend (its default assembly, gather or tiled, is deterministic), where a device is.
 TEST(Runner, ResumedCudaRunIsBitIdentical) {
   if (!cuda_device_available()) GTEST_SKIP() << "no CUDA device";
   TempDir dir("restart_cuda");

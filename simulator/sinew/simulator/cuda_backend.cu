@@ -1,5 +1,6 @@
 // CUDA backend: kernels are thin entry points (index -> physics/element.hpp call); the host class
 // mirrors CpuEngine's step, checks and state. Design and measurements: docs/cuda-backend.md.
+#include <cuda_pipeline.h>
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
+#include "sinew/simulator/lattice_tiles.hpp"
 #include "sinew/simulator/physics/element.hpp"
 #include "sinew/simulator/prepared_model.hpp"
 
@@ -50,12 +52,12 @@ __device__ __forceinline__ double block_sum(double value, double* s, int tid) {
 // every block's thread 0 wrote its partial before the call; the last block may then read all
 // partials (with __ldcg: past the L1) and sum them in index order (deterministic). The counter is
 // back at 0 afterwards.
-__device__ __forceinline__ bool last_block(unsigned* counter, int tid) {
+__device__ __forceinline__ bool last_block(unsigned* counter, int tid, unsigned blocks) {
   __shared__ bool last;
   __threadfence();
   if (tid == 0) {
     const unsigned done = atomicAdd(counter, 1u);
-    last = done == gridDim.x - 1;
+    last = done == blocks - 1;
     if (last) *counter = 0;
   }
   __syncthreads();
@@ -281,7 +283,9 @@ struct SlideSurface {
 // 3.6 triangles per node on average (at most 10) with the default skin, 12.5 (at most 22) with 0.25.
 constexpr int kCandidates = 32;
 
-// Per sliding node k: node id, surface, rest distance, closest triangle (warm start), and its
+// Per sliding node k: node id, surface, rest distance, closest triangle of the last step (the warm
+// start of the tie rule, as the CPU's), the warm start of the grid searches (written by list
+// refreshes only, so a refresh running beside a step never touches what the step reads), and its
 // candidate list: count (−1: none, search fully), anchor x_s, ids at list[j · count + k].
 template <typename T>
 struct SlideData {
@@ -289,6 +293,7 @@ struct SlideData {
   const std::int32_t* surface;
   const T* distance;
   std::int32_t* triangle;
+  std::int32_t* search_triangle;
   std::int32_t* list_count;
   Vec3<T>* anchor;
   std::int32_t* list;
@@ -299,10 +304,10 @@ struct SlideData {
 
 // Sliding node k at position x: while x is within s (1 − 1e-3) of the anchor of its list, the
 // list holds its closest triangle (sliding_grid.hpp) and nothing is done; otherwise the full grid
-// search finds the closest triangle (into triangle[k]), re-lists the triangles within d1 + 2 s and
-// moves the anchor to x (list count −1 when more than kCandidates: the triangle found is used).
-// `reach` (≤ 1): the fraction of s within which the anchor is kept (½ when refreshing ahead of the
-// step, from u(n), so that u(n+1) still lies within s of the anchor).
+// search finds the closest triangle (into search_triangle[k]), re-lists the triangles within
+// d1 + 2 s and moves the anchor to x (list count −1 when more than kCandidates: the triangle found
+// is used). `reach` (≤ 1): the fraction of s within which the anchor is kept (½ when refreshing ahead
+// of the step, from u(n), so that u(n+1) still lies within s of the anchor).
 template <typename T>
 __device__ __forceinline__ void refresh_slide_list(const SlideData<T>& d, std::int32_t k,
                                                    const Vec3<T>& x, T reach) {
@@ -310,9 +315,9 @@ __device__ __forceinline__ void refresh_slide_list(const SlideData<T>& d, std::i
   const T skin = sf.skin;
   const T move = skin * T(0.999) * reach;
   if (d.list_count[k] > 0 && squared_norm(x - d.anchor[k]) <= move * move) return;
-  std::int32_t t = d.triangle[k];
+  std::int32_t t = d.search_triangle[k];
   const Vec3<T> p = closest_surface_search<T, true>(sf.view, x, t);
-  d.triangle[k] = t;
+  d.search_triangle[k] = t;
   const T d1 = std::sqrt(squared_norm(x - p));
   d.list_count[k] =
       collect_surface_candidates(sf.view, x, d1 + T(2) * skin, d.list + k, d.count, kCandidates);
@@ -343,11 +348,13 @@ __device__ __forceinline__ Vec3<T> slide_entry(const SlideData<T>& d, std::int32
   Vec3<T> p;
   if (listed > 0) {
     p = closest_listed_point(sf.corners, d.list + k, d.count, listed, x, t);
-    d.triangle[k] = t;
-  } else {
+  } else if constexpr (kRefresh) {  // overflow: the grid search, warm-started as the CPU's
+    p = closest_surface_search<T, true>(sf.view, x, t);
+  } else {  // overflow without a search: a miss (raised above), replayed; any finite point
     p = physics::closest_point_on_triangle(x, sf.corners[3 * t], sf.corners[3 * t + 1],
                                            sf.corners[3 * t + 2]);
   }
+  d.triangle[k] = t;
   return physics::project_to_rest_distance(x, p, sf.view.normals[t], d.distance[k]) - rest;
 }
 
@@ -481,14 +488,82 @@ __global__ void __launch_bounds__(kBlock)
   refresh_slide_list(d, k, rest[i] + u[i], T(0.5));
 }
 
-// Gather (or read and clear the atomic sums) + central-difference update + finite check.
-// kProgram (models without sliding): the node's loads and constraints too (its ops at
-// node_offset[i] .. node_offset[i + 1] of program.op), so the step needs no constraint kernel.
-// Work: the node's terms of this step (gravity; kProgram: its loads and constraint forces; without
-// kProgram gravity before constraints, the constraint kernel adds the rest) added to its
-// accumulator. kEnergyTest (blow-up test steps): the kinetic energy of u(n), u(n−1) and the work up
-// to step n − 1 (the accumulators before this step's terms), each summed per block and then by the
-// last block in block order, and the test against the bound.
+// A node's step in two parts. move_node: the central-difference update of node i from its internal
+// force f (ui, upi: its u(n), u(n−1); im: its inverse mass, loaded by the caller) and the finite
+// check; with energy_test it adds its kinetic energy at u(n) to ke. Returns u(n+1) before its loads
+// and constraints.
+template <typename T, bool kGravity>
+__device__ __forceinline__ Vec3<T> move_node(const NodeData<T>& d, std::int32_t i, const Vec3<T>& f,
+                                             const Vec3<T>& ui, const Vec3<T>& upi, T im,
+                                             Status* status, const StepSums& sums, bool energy_test,
+                                             double& ke) {
+  Vec3<T> g{T(0), T(0), T(0)};
+  if constexpr (kGravity) g = d.gravity[i];
+  const Vec3<T> v = physics::node_update<T, kGravity>(d.cd, im, f, g, ui, upi);
+  if (!(isfinite(v.x) && isfinite(v.y) && isfinite(v.z))) status->bad_displacement = 1;
+  if (energy_test) {
+    const double vx = (double(ui.x) - double(upi.x)) * sums.inv_dt;
+    const double vy = (double(ui.y) - double(upi.y)) * sums.inv_dt;
+    const double vz = (double(ui.z) - double(upi.z)) * sums.inv_dt;
+    ke += 0.5 / double(im) * (vx * vx + vy * vy + vz * vz);
+  }
+  return v;
+}
+
+// finish_node: (kProgram) node i's loads and constraints, its ops [begin, end) of program.op, on
+// its u(n+1) v; writes u(n+1) to un, and adds the node's work of this step to its accumulator
+// (gravity; kProgram: its loads and constraint forces; without kProgram gravity before constraints,
+// the constraint kernel adds the rest). With energy_test it adds to w_old the node's work up to
+// step n − 1 (the accumulator before this step). kSlide: as run_program.
+template <typename T, bool kGravity, bool kProgram, int kSlide>
+__device__ __forceinline__ void finish_node(const NodeData<T>& d, std::int32_t i, Vec3<T> v,
+                                            const Vec3<T>& upi, const Vec3<T>* __restrict__ up,
+                                            Vec3<T>* __restrict__ un, const StepSums& sums,
+                                            const ConstraintData<T>& program, std::int32_t begin,
+                                            std::int32_t end, const T* factor, bool energy_test,
+                                            double& w_old) {
+  double w = 0;
+  bool has_work = kGravity;
+  if constexpr (kProgram) {
+    v = run_program<T, kSlide>(program, i, begin, end, factor, true, v, up, sums.work_acc, w);
+    has_work = has_work || begin < end;
+  }
+  un[i] = v;
+  if constexpr (kGravity) {
+    const Vec3<T> g = d.gravity[i];
+    for (int c = 0; c < 3; ++c) w += double(g[c]) * 0.5 * (double(v[c]) - double(upi[c]));
+  }
+  if (sums.work_acc && (has_work || energy_test)) {
+    const double w0 = sums.work_acc[i];
+    if (has_work) sums.work_acc[i] = w0 + w;
+    w_old += w0;
+  }
+}
+
+// The blow-up test at the end of a node pass, for every thread of the block: the block's sums of
+// ke and w_old, then, by the last block of the grid in block order, the kinetic energy of u(n)
+// against the bound with the work up to step n − 1.
+__device__ __forceinline__ void blowup_test(double ke, double w_old, const StepSums& sums,
+                                            Status* status, int tid, unsigned block,
+                                            unsigned blocks) {
+  __shared__ double sh[kBlock];
+  const double k_sum = block_sum(ke, sh, tid);
+  const double w_sum = sums.work_acc ? block_sum(w_old, sh, tid) : 0.0;  // uniform
+  if (tid == 0) {
+    sums.kinetic_partial[block] = k_sum;
+    sums.work_partial[block] = w_sum;
+  }
+  if (last_block(sums.counter, tid, blocks)) {
+    const double kinetic = sum_partials(sums.kinetic_partial, int(blocks), sh, tid);
+    const double work = *sums.work_base + sum_partials(sums.work_partial, int(blocks), sh, tid);
+    if (tid == 0 &&
+        (!isfinite(kinetic) || kinetic > sums.bound->factor * (sums.bound->base + fabs(work))))
+      status->blowup = 1;
+  }
+}
+
+// Gather (or read and clear the atomic sums), then move_node and finish_node. kEnergyTest: blow-up
+// test steps.
 template <typename T, bool kGather, bool kGravity, bool kEnergyTest, bool kProgram>
 __global__ void __launch_bounds__(kBlock)
     node_kernel(NodeData<T> d, const Vec3<T>* __restrict__ element_force,
@@ -506,51 +581,202 @@ __global__ void __launch_bounds__(kBlock)
       f = f_sum[i];
       f_sum[i] = Vec3<T>{T(0), T(0), T(0)};
     }
-    Vec3<T> g{T(0), T(0), T(0)};
-    if constexpr (kGravity) g = d.gravity[i];
-    const Vec3<T> ui = u[i], upi = up[i];
-    const T im = d.inverse_mass[i];
-    Vec3<T> v = physics::node_update<T, kGravity>(d.cd, im, f, g, ui, upi);
-    if (!(isfinite(v.x) && isfinite(v.y) && isfinite(v.z))) status->bad_displacement = 1;
-    double w = 0;
-    bool has_work = kGravity;
+    const Vec3<T> upi = up[i];
+    const Vec3<T> v = move_node<T, kGravity>(d, i, f, u[i], upi, d.inverse_mass[i], status, sums,
+                                             kEnergyTest, ke);
+    std::int32_t begin = 0, end = 0;
     if constexpr (kProgram) {
-      const std::int32_t begin = node_offset[i], end = node_offset[i + 1];
-      v = run_program<T, 0>(program, i, begin, end, factor, true, v, up, sums.work_acc, w);
-      has_work = has_work || begin < end;
+      begin = node_offset[i];
+      end = node_offset[i + 1];
     }
-    un[i] = v;
-    if constexpr (kGravity)
-      for (int c = 0; c < 3; ++c) w += double(g[c]) * 0.5 * (double(v[c]) - double(upi[c]));
-    if (sums.work_acc && (has_work || kEnergyTest)) {
-      w_old = sums.work_acc[i];
-      if (has_work) sums.work_acc[i] = w_old + w;
-    }
-    if constexpr (kEnergyTest) {
-      const double vx = (double(ui.x) - double(upi.x)) * sums.inv_dt;
-      const double vy = (double(ui.y) - double(upi.y)) * sums.inv_dt;
-      const double vz = (double(ui.z) - double(upi.z)) * sums.inv_dt;
-      ke = 0.5 / double(im) * (vx * vx + vy * vy + vz * vz);
-    }
+    finish_node<T, kGravity, kProgram, 0>(d, i, v, upi, up, un, sums, program, begin, end, factor,
+                                          kEnergyTest, w_old);
   }
-  if constexpr (kEnergyTest) {
-    __shared__ double sh[kBlock];
-    const int tid = int(threadIdx.x);
-    const double k_sum = block_sum(ke, sh, tid);
-    const double w_sum = sums.work_acc ? block_sum(w_old, sh, tid) : 0.0;  // uniform
-    if (tid == 0) {
-      sums.kinetic_partial[blockIdx.x] = k_sum;
-      sums.work_partial[blockIdx.x] = w_sum;
-    }
-    if (last_block(sums.counter, tid)) {
-      const double kinetic = sum_partials(sums.kinetic_partial, int(gridDim.x), sh, tid);
-      const double work =
-          *sums.work_base + sum_partials(sums.work_partial, int(gridDim.x), sh, tid);
-      if (tid == 0 &&
-          (!isfinite(kinetic) || kinetic > sums.bound->factor * (sums.bound->base + fabs(work))))
-        status->blowup = 1;
-    }
+  if constexpr (kEnergyTest)
+    blowup_test(ke, w_old, sums, status, int(threadIdx.x), blockIdx.x, gridDim.x);
+}
+
+// Tiled assembly (lattice_tiles.hpp): one block per tile walks its node layers upwards; per layer
+// it computes the element slots of the layer (one thread per slot, physics::element_forces) from
+// the u windows of the node layers below and above them, keeps their corner forces in shared
+// memory and lets each of its nodes sum its entries in the gather order (lattice_tiles.hpp), then
+// move_node and finish_node; nodes with loads or constraints (kProgram) finish after the last
+// layer. Same sums in the same order as gather, with no element force buffer in DRAM.
+// Software-pipelined: the table entries, u window and node data a layer needs are loaded one
+// layer ahead, so their latency overlaps the element work (three window buffers in rotation; the
+// u windows copied to shared memory asynchronously, without registers).
+struct TileData {
+  const std::int32_t* layers;  // per tile
+  const std::int32_t* window;  // tiles × window_stride node ids
+  const std::int32_t* slot;    // tiles × slot_stride element ids
+  std::int64_t window_stride, slot_stride;
+};
+constexpr int kTileWindowPoints = kTileWindow * kTileWindow;
+constexpr int kTileSlotCount = kTileSlots * kTileSlots;
+static_assert(kTileSlotCount == kBlock, "one thread per element slot");
+static_assert(kTileWindowPoints <= 2 * kBlock, "two window points per thread at most");
+// Shared memory of tile_kernel: three u windows, the top corners of two element layers (the one
+// below the node layer and the one being computed), the bottom corners of one.
+template <typename T>
+constexpr std::size_t tile_shared_bytes() {
+  return sizeof(Vec3<T>) * std::size_t(3 * kTileWindowPoints + 12 * kTileSlotCount);
+}
+// Blocks of tile_kernel resident per SM the compiler must allow (registers ≤ 80 in float): three
+// hide the element work's latency better than two with more registers (docs/performance.md:
+// 0.0639 → 0.0574 ms/step on the face-scale model, no spills). Double keeps the compiler's choice.
+template <typename T>
+constexpr int kTileMinBlocks = sizeof(T) == 4 ? 3 : 1;
+
+// dst (shared) = u[id] (global) without passing through registers (Hopper/Ampere cp.async; waited
+// for with __pipeline_wait_prior), or zero where id < 0.
+template <typename T>
+__device__ __forceinline__ void copy_point_async(Vec3<T>* dst, const Vec3<T>* u, std::int32_t id) {
+  if (id < 0) {
+    *dst = Vec3<T>{T(0), T(0), T(0)};
+    return;
   }
+  const T* src = &u[id].x;
+  T* d = &dst->x;
+  for (int c = 0; c < 3; ++c) __pipeline_memcpy_async(d + c, src + c, sizeof(T));
+}
+
+template <typename T, bool kElastic, bool kMuscle, bool kHourglass, bool kGravity, bool kProgram>
+__global__ void __launch_bounds__(kBlock, kTileMinBlocks<T>)
+    tile_kernel(TileData tiles, ElementData<T> ed, NodeData<T> nd, const Vec3<T>* __restrict__ u,
+                const T* __restrict__ activation, const Vec3<T>* __restrict__ up,
+                Vec3<T>* __restrict__ un, Status* status, StepSums sums, ConstraintData<T> program,
+                const std::int32_t* node_offset, const T* factor, bool energy_test) {
+  extern __shared__ __align__(16) unsigned char tile_shared[];
+  Vec3<T>* const window = reinterpret_cast<Vec3<T>*>(tile_shared);  // [3][window points]
+  Vec3<T>* const top = window + 3 * kTileWindowPoints;              // [2][4 corners][slots]
+  Vec3<T>* const bottom = top + 8 * kTileSlotCount;                 // [4 corners][slots]
+  const int tid = int(threadIdx.x);
+  const std::int32_t* wtab = tiles.window + std::int64_t(blockIdx.x) * tiles.window_stride;
+  const std::int32_t* stab = tiles.slot + std::int64_t(blockIdx.x) * tiles.slot_stride;
+  const int layers = tiles.layers[blockIdx.x];  // window layers 0 .. layers + 1
+  const Vec3<T> zero{T(0), T(0), T(0)};
+  // This thread's window points (tid, and tid + kBlock when that is < kTileWindowPoints), its
+  // element slot (sx, sy) and, for tid < 225, its node at window point (wx, wy).
+  const bool second = tid + kBlock < kTileWindowPoints;
+  const int sx = tid % kTileSlots, sy = tid / kTileSlots;
+  const bool owner = tid < kTileNodes * kTileNodes;
+  const int wx = 1 + tid % kTileNodes, wy = 1 + tid / kTileNodes;
+  const int node_point = wy * kTileWindow + wx;
+  auto window_ids = [&](int l, std::int32_t& a, std::int32_t& b) {
+    a = l <= layers + 1 ? wtab[l * kTileWindowPoints + tid] : -1;
+    b = second && l <= layers + 1 ? wtab[l * kTileWindowPoints + tid + kBlock] : -1;
+  };
+  auto fetch = [&](std::int32_t id) { return id >= 0 ? u[id] : zero; };
+  // Prologue: windows 0 and 1 in buffers 0 and 1; the ids of window 2; element layer 0; the node
+  // of window layer 1.
+  std::int32_t ia, ib;
+  for (int l = 0; l < 2; ++l) {
+    window_ids(l, ia, ib);
+    window[l * kTileWindowPoints + tid] = fetch(ia);
+    if (second) window[l * kTileWindowPoints + tid + kBlock] = fetch(ib);
+  }
+  window_ids(2, ia, ib);
+  std::int32_t e = stab[tid];
+  std::int32_t row_index = e >= 0 ? ed.row[e] : 0;
+  std::int32_t node = -1;  // window layer 0 has no node of the tile
+  Vec3<T> node_up = zero;
+  T node_im = T(0);
+  std::int32_t node_begin = 0, node_end = 0;  // its ops (kProgram)
+  __syncthreads();
+  double ke = 0, w_old = 0;
+  for (int l = 0; l <= layers; ++l) {
+    // A: loads for later layers, issued before the element work: window l + 2 (ids known), the
+    // ids of window l + 3, the element of layer l + 1 and the node of window layer l + 1.
+    {  // window l + 2 into the buffer window l − 1 had (last read before the previous barrier)
+      Vec3<T>* w2 = window + ((l + 2) % 3) * kTileWindowPoints;
+      copy_point_async(w2 + tid, u, ia);
+      if (second) copy_point_async(w2 + tid + kBlock, u, ib);
+      __pipeline_commit();
+    }
+    window_ids(l + 3, ia, ib);
+    const std::int32_t e_next = l + 1 <= layers ? stab[(l + 1) * kTileSlotCount + tid] : -1;
+    const std::int32_t node_next =
+        owner && l + 1 <= layers ? wtab[(l + 1) * kTileWindowPoints + node_point] : -1;
+    // B: element layer l (between window layers l and l + 1).
+    const Vec3<T>* wl = window + (l % 3) * kTileWindowPoints;
+    const Vec3<T>* wu = window + ((l + 1) % 3) * kTileWindowPoints;
+    Vec3<T>* top_l = top + (l & 1) * 4 * kTileSlotCount;
+    if (e >= 0) {
+      const int p = sy * kTileWindow + sx;
+      const Vec3<T> ue[8] = {wl[p], wl[p + 1], wl[p + kTileWindow + 1], wl[p + kTileWindow],
+                             wu[p], wu[p + 1], wu[p + kTileWindow + 1], wu[p + kTileWindow]};
+      const physics::ElementRow<T> row = ed.rows[row_index];
+      physics::MuscleEntries<T> m{
+          ed.muscle_id, ed.muscle_fraction, ed.muscle_fibre, ed.muscle_params, activation, 0, 0};
+      if constexpr (kMuscle) {
+        m.begin = ed.muscle_offset[e];
+        m.end = ed.muscle_offset[e + 1];
+      }
+      Vec3<T> fe[8];
+      const auto r =
+          physics::element_forces<T, kElastic, kMuscle, kHourglass, false>(ue, ed.h, row, m, fe);
+      if (!(r.j > T(0))) status->bad_jacobian = 1;
+#pragma unroll
+      for (int c = 0; c < 4; ++c) {
+        bottom[c * kTileSlotCount + tid] = fe[c];
+        top_l[c * kTileSlotCount + tid] = fe[4 + c];
+      }
+    } else {
+#pragma unroll
+      for (int c = 0; c < 4; ++c) {
+        bottom[c * kTileSlotCount + tid] = zero;
+        top_l[c * kTileSlotCount + tid] = zero;
+      }
+    }
+    __syncthreads();
+    // D: the node of window layer l (node layer l − 1 of the tile).
+    if (l >= 1 && node >= 0) {
+      const Vec3<T>* below = top + ((l - 1) & 1) * 4 * kTileSlotCount;
+      Vec3<T> f = zero;
+#pragma unroll
+      for (int q = 0; q < 4; ++q)
+        f += below[tile_gather_corner(q) * kTileSlotCount + tile_gather_slot(wx, wy, q)];
+#pragma unroll
+      for (int q = 0; q < 4; ++q)
+        f += bottom[tile_gather_corner(q) * kTileSlotCount + tile_gather_slot(wx, wy, q)];
+      // Nodes with loads or constraints finish after the layers (their program's dependent loads
+      // then overlap instead of holding the block at each layer's barrier).
+      const Vec3<T> v = move_node<T, kGravity>(nd, node, f, wl[node_point], node_up, node_im,
+                                               status, sums, energy_test, ke);
+      if (node_begin == node_end)
+        finish_node<T, kGravity, false, 0>(nd, node, v, node_up, up, un, sums, program, 0, 0,
+                                           factor, energy_test, w_old);
+      else
+        un[node] = v;
+    }
+    // Next layer's element row and node data (their ids had the element work to arrive; the node
+    // data has the next element work to arrive).
+    e = e_next;
+    row_index = e >= 0 ? ed.row[e] : 0;
+    node = node_next;
+    if (node >= 0) {
+      node_up = up[node];
+      node_im = nd.inverse_mass[node];
+      if constexpr (kProgram) {
+        node_begin = node_offset[node];
+        node_end = node_offset[node + 1];
+      }
+    }
+    __pipeline_wait_prior(0);  // window l + 2 has landed (the next layer reads it)
+    __syncthreads();  // the next layer overwrites `bottom`, the top corners read here, window l
+  }
+  if constexpr (kProgram) {  // the deferred nodes: their u(n+1) before the program is in un
+    if (owner)
+      for (int l = 1; l <= layers; ++l) {
+        const std::int32_t i = wtab[l * kTileWindowPoints + node_point];
+        if (i < 0) continue;
+        const std::int32_t begin = node_offset[i], end = node_offset[i + 1];
+        if (begin == end) continue;
+        finish_node<T, kGravity, true, 0>(nd, i, un[i], up[i], up, un, sums, program, begin, end,
+                                          factor, energy_test, w_old);
+      }
+  }
+  if (energy_test) blowup_test(ke, w_old, sums, status, tid, blockIdx.x, gridDim.x);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -602,6 +828,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   std::vector<float> timed_graph_launches(int launches) override;
   int graph_steps() const override { return batch_; }
   double bytes_per_step() const override;
+  ForceAssembly assembly() const override { return options_.assembly; }
 
  private:
   Vec3<T>* buffer(std::int64_t step, int role) const {  // role 0: u(n), 1: u(n+1), 2: u(n−1)
@@ -610,19 +837,27 @@ class CudaEngine final : public Backend, public CudaTiming {
   double curve_time(double t) const { return t / setup_.time_scaling; }
   void fill_scalars(std::int64_t first_step, int count, int slot0);
   void launch_elements(const Vec3<T>* u, const T* activation, int mode, cudaStream_t s);
+  void launch_nodes(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc, bool blowup_test,
+                    cudaStream_t s);
+  void launch_tiles(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc, bool blowup_test,
+                    cudaStream_t s);
   // ahead: the lists were refreshed from u(n) by slide_refresh_kernel (launch_step).
   void launch_constraints(const T* factor, bool loads, Vec3<T>* un, const Vec3<T>* up,
                           cudaStream_t s, bool ahead) {
     const unsigned g = blocks_for(con_node_.size());
+    const ConstraintData<T> d = constraint_data();
     if (slide_node_.size() && ahead)
-      constraint_kernel<T, 2>
-          <<<g, kBlock, 0, s>>>(constraint_data(), factor, loads, un, up, step_sums());
+      constraint_kernel<T, 2><<<g, kBlock, 0, s>>>(d, factor, loads, un, up, step_sums());
     else if (slide_node_.size())
-      constraint_kernel<T, 1>
-          <<<g, kBlock, 0, s>>>(constraint_data(), factor, loads, un, up, step_sums());
+      constraint_kernel<T, 1><<<g, kBlock, 0, s>>>(d, factor, loads, un, up, step_sums());
     else
-      constraint_kernel<T, 0>
-          <<<g, kBlock, 0, s>>>(constraint_data(), factor, loads, un, up, step_sums());
+      constraint_kernel<T, 0><<<g, kBlock, 0, s>>>(d, factor, loads, un, up, step_sums());
+    SINEW_CUDA_LAUNCHED();
+  }
+  // The sliding lists from u(n) for step n (anchors kept within s/2: slide_refresh_kernel).
+  void launch_refresh(const Vec3<T>* u, cudaStream_t s) {
+    slide_refresh_kernel<T>
+        <<<blocks_for(slide_node_.size()), kBlock, 0, s>>>(slide_data(), rest_.get(), u);
     SINEW_CUDA_LAUNCHED();
   }
   // ahead: sliding lists refreshed ahead on slide_stream_ (graph steps, stage timing); direct
@@ -691,6 +926,9 @@ class CudaEngine final : public Backend, public CudaTiming {
   // forces and nodes
   DeviceArray<Vec3<T>> elem_force_, f_sum_, f_;
   DeviceArray<std::int32_t> inc_offset_, inc_;
+  // tiled assembly (lattice_tiles.hpp)
+  DeviceArray<std::int32_t> tile_layers_, tile_window_, tile_slot_;
+  TileData tile_data_{};
   DeviceArray<T> inverse_mass_;
   DeviceArray<Vec3<T>> gravity_, rest_;
   DeviceArray<Vec3<T>> buf_[3];
@@ -750,12 +988,20 @@ class CudaEngine final : public Backend, public CudaTiming {
   std::vector<std::unique_ptr<DeviceSurface<T>>> surfaces_;
   DeviceArray<SlideSurface<T>> slide_surfaces_;
   DeviceArray<std::int32_t> slide_node_, slide_surface_, slide_triangle_, snap_triangle_;
+  DeviceArray<std::int32_t> slide_search_triangle_;
   DeviceArray<std::int32_t> slide_list_count_, slide_list_;
   DeviceArray<Vec3<T>> slide_anchor_;
   SlideData<T> slide_data() const {
-    return {slide_node_.get(),     slide_surface_.get(),    slide_distance_.get(),
-            slide_triangle_.get(), slide_list_count_.get(), slide_anchor_.get(),
-            slide_list_.get(),     slide_surfaces_.get(),   std::int32_t(slide_node_.size()),
+    return {slide_node_.get(),
+            slide_surface_.get(),
+            slide_distance_.get(),
+            slide_triangle_.get(),
+            slide_search_triangle_.get(),
+            slide_list_count_.get(),
+            slide_anchor_.get(),
+            slide_list_.get(),
+            slide_surfaces_.get(),
+            std::int32_t(slide_node_.size()),
             status_.get()};
   }
   void forget_slide_lists(cudaStream_t s) {  // every node searches fully at its next step
@@ -778,6 +1024,12 @@ template <typename T>
 CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan plan,
                           const CudaOptions& options)
     : setup_(setup), plan_(std::move(plan)), options_(options) {
+  if (options.sliding_refresh_interval < 1)
+    throw ConfigError("", "sliding_refresh_interval",
+                      format("must be at least 1 step, got %d", options.sliding_refresh_interval));
+  if (options.tiles_per_sm < 1)
+    throw ConfigError("", "tiles_per_sm",
+                      format("must be at least 1, got %d", options.tiles_per_sm));
   if (!(options.sliding_skin > 0) || !std::isfinite(options.sliding_skin))
     throw ConfigError(
         "", "sliding_skin",
@@ -848,9 +1100,23 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     muscle_params_.upload(mp);
     muscles_ = mp.size();
   }
-  if (options.assembly == ForceAssembly::gather) {
+  if (options.assembly == ForceAssembly::tiled || options.assembly == ForceAssembly::automatic) {
+    const LatticeTiles tiles =
+        make_lattice_tiles(model.node_lattice, model.element_lattice,
+                           std::size_t(options.tiles_per_sm) * std::size_t(sm_count_));
+    if (options.assembly == ForceAssembly::automatic)
+      options_.assembly = tiles_pay_off(tiles, e_) ? ForceAssembly::tiled : ForceAssembly::gather;
+    if (options_.assembly == ForceAssembly::tiled) {
+      tile_layers_.upload(tiles.tile_layers);
+      tile_window_.upload(tiles.window_node);
+      tile_slot_.upload(tiles.slot_element);
+      tile_data_ = {tile_layers_.get(), tile_window_.get(), tile_slot_.get(),
+                    std::int64_t(tiles.window_stride()), std::int64_t(tiles.slot_stride())};
+    }
+  }
+  if (options_.assembly == ForceAssembly::gather) {
     elem_force_.allocate(e_ * 8);
-  } else {
+  } else if (options_.assembly == ForceAssembly::atomic) {
     f_sum_.allocate(n_);
     f_sum_.zero();
   }
@@ -938,7 +1204,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
       code.push_back(ops[k].code);
     }
     if (!ops.empty()) offset.push_back(std::int32_t(ops.size()));
-    if (prep_.slide_node.empty()) {
+    {  // per node: its ops (node kernel, tile kernel)
       std::vector<std::int32_t> per_node(n_ + 1, 0);
       for (std::size_t c = 0; c < node.size(); ++c)
         per_node[std::size_t(node[c]) + 1] = offset[c + 1] - offset[c];
@@ -995,6 +1261,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     slide_surface_.upload(prep_.slide_surface);
     slide_triangle_.upload(prep_.slide_triangle);
     snap_triangle_.allocate(prep_.slide_triangle.size());
+    slide_search_triangle_.upload(prep_.slide_triangle);
     slide_list_count_.allocate(prep_.slide_node.size());
     slide_list_.allocate(prep_.slide_node.size() * kCandidates);
     slide_anchor_.allocate(prep_.slide_node.size());
@@ -1011,8 +1278,8 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     work_acc_.zero();
     snap_work_acc_.allocate(n_);
   }
-  work_partial_.allocate(blocks_for(n_));
-  ke_partial_.allocate(blocks_for(n_));
+  work_partial_.allocate(std::max<std::size_t>(blocks_for(n_), tile_layers_.size()));
+  ke_partial_.allocate(std::max<std::size_t>(blocks_for(n_), tile_layers_.size()));
   counters_.allocate(1);
   counters_.zero();
   bound_.upload({BlowupBound{0, 0}});
@@ -1167,18 +1434,39 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
   };
   mark("start");
   const bool ahead = ahead_slide && slide_node_.size();
-  if (ahead) {  // fork: the lists for this step, from u(n), beside the element and node kernels
+  // Lists refreshed every sliding_refresh_interval steps (a batch starts with one); in between a
+  // node keeps its list while within s of its anchor (else a miss and a replay).
+  const bool refresh = ahead && step % options_.sliding_refresh_interval == 0;
+  const T* sc = scalars_.get() + scalars_per_slot_ * std::size_t(slot);
+  if (refresh) {  // fork: the lists for this step, from u(n), beside the element and node kernels
     SINEW_CUDA_CHECK(cudaEventRecord(slide_fork_, s));
     SINEW_CUDA_CHECK(cudaStreamWaitEvent(slide_stream_, slide_fork_, 0));
-    slide_refresh_kernel<T><<<blocks_for(slide_node_.size()), kBlock, 0, slide_stream_>>>(
-        slide_data(), rest_.get(), u);
-    SINEW_CUDA_LAUNCHED();
+    launch_refresh(u, slide_stream_);
     SINEW_CUDA_CHECK(cudaEventRecord(slide_done_, slide_stream_));
   }
-  const T* sc = scalars_.get() + scalars_per_slot_ * std::size_t(slot);
+  if (options_.assembly == ForceAssembly::tiled) {
+    launch_tiles(u, up, un, sc, blowup_test, s);
+    mark(program_in_node_ ? "elements + nodes in tiles (+ loads, constraints, work, KE test)"
+                          : "elements + nodes in tiles (+ KE test)");
+  } else {
+    launch_elements(u, sc, options_.assembly == ForceAssembly::gather ? 0 : 1, s);
+    mark("elements: F, S (+ muscles), forces, hourglass");
+    launch_nodes(u, up, un, sc, blowup_test, s);
+    mark(program_in_node_ ? "nodes: force gather + update + loads, constraints, work (+ KE test)"
+                          : "nodes: force gather + central-difference update (+ KE test)");
+  }
+  if (!program_in_node_ && con_node_.size()) {
+    if (refresh) SINEW_CUDA_CHECK(cudaStreamWaitEvent(s, slide_done_, 0));  // join
+    launch_constraints(sc + muscles_, true, un, up, s, ahead);
+    mark("loads, sliding, planes, prescribed, rigid + external work");
+  }
+}
+
+// The node kernel after the element kernels (gather or atomic assembly).
+template <typename T>
+void CudaEngine<T>::launch_nodes(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc,
+                                 bool blowup_test, cudaStream_t s) {
   const bool gather = options_.assembly == ForceAssembly::gather;
-  launch_elements(u, sc, gather ? 0 : 1, s);
-  mark("elements: F, S (+ muscles), forces, hourglass");
   NodeData<T> nd{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
                  std::int32_t(n_)};
   const StepSums sums = step_sums();
@@ -1204,13 +1492,47 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
 #undef SINEW_NK2
 #undef SINEW_NK
   SINEW_CUDA_LAUNCHED();
-  mark(program_in_node_ ? "nodes: force gather + update + loads, constraints, work (+ KE test)"
-                        : "nodes: force gather + central-difference update (+ KE test)");
-  if (!program_in_node_ && con_node_.size()) {
-    if (ahead) SINEW_CUDA_CHECK(cudaStreamWaitEvent(s, slide_done_, 0));  // join
-    launch_constraints(sc + muscles_, true, un, up, s, ahead);
-    mark("loads, sliding, planes, prescribed, rigid + external work");
-  }
+}
+
+template <typename T>
+void CudaEngine<T>::launch_tiles(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc,
+                                 bool blowup_test, cudaStream_t s) {
+  ElementData<T> ed{elem_nodes_.get(),    row_.get(),           rows_.get(),
+                    muscle_offset_.get(), muscle_id_.get(),     muscle_fraction_.get(),
+                    muscle_fibre_.get(),  muscle_params_.get(), h_,
+                    std::int32_t(e_)};
+  NodeData<T> nd{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
+                 std::int32_t(n_)};
+  const StepSums sums = step_sums();
+  const ConstraintData<T> program = constraint_data();
+  const unsigned g = unsigned(tile_layers_.size());
+  constexpr std::size_t bytes = tile_shared_bytes<T>();
+  auto go = [&](auto kernel) {
+    SINEW_CUDA_CHECK(
+        cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, int(bytes)));
+    kernel<<<g, kBlock, bytes, s>>>(tile_data_, ed, nd, u, sc, up, un, status_.get(), sums, program,
+                                    node_op_offset_.get(), sc + muscles_, blowup_test);
+  };
+  const Effects& fx = setup_.effects;
+  const bool el = fx.elasticity, mu = fx.muscles, hg = fx.hourglass, gr = fx.gravity;
+  const bool pr = program_in_node_;  // else the constraint kernel follows
+  // Every effect combination is its own specialised kernel.
+#define SINEW_TK(E, M, H, G, P) \
+  if (el == E && mu == M && hg == H && gr == G && pr == P) go(tile_kernel<T, E, M, H, G, P>);
+#define SINEW_TK2(E, M, H, G) SINEW_TK(E, M, H, G, true) SINEW_TK(E, M, H, G, false)
+#define SINEW_TK4(E, M, H) SINEW_TK2(E, M, H, true) SINEW_TK2(E, M, H, false)
+  SINEW_TK4(true, true, true)
+  SINEW_TK4(true, true, false)
+  SINEW_TK4(true, false, true)
+  SINEW_TK4(true, false, false)
+  SINEW_TK4(false, true, true)
+  SINEW_TK4(false, true, false)
+  SINEW_TK4(false, false, true)
+  SINEW_TK4(false, false, false)
+#undef SINEW_TK4
+#undef SINEW_TK2
+#undef SINEW_TK
+  SINEW_CUDA_LAUNCHED();
 }
 
 // Per-stage device time of direct (non-graph) steps: events between the stages of launch_step,
@@ -1695,9 +2017,12 @@ void CudaEngine<T>::restore(const State& s) {
   step_ = s.step;
   upload_vec(buffer(step_, 0), s.u);
   upload_vec(buffer(step_, 2), s.u_prev);
-  if (!s.sliding_triangle.empty())
+  if (!s.sliding_triangle.empty()) {
     SINEW_CUDA_CHECK(cudaMemcpy(slide_triangle_.get(), s.sliding_triangle.data(),
                                 slide_triangle_.bytes(), cudaMemcpyHostToDevice));
+    SINEW_CUDA_CHECK(cudaMemcpy(slide_search_triangle_.get(), s.sliding_triangle.data(),
+                                slide_search_triangle_.bytes(), cudaMemcpyHostToDevice));
+  }
   SINEW_CUDA_CHECK(
       cudaMemcpy(work_base_.get(), &s.external_work, sizeof(double), cudaMemcpyHostToDevice));
   if (work_acc_.size()) work_acc_.zero();
@@ -1750,7 +2075,11 @@ double CudaEngine<T>::bytes_per_step() const {
   const double t = sizeof(T);
   double b = double(e_) * (32 + 4 + 4);            // node ids, collection list, row id
   b += double(n_) * (3 * t) * 3 + double(n_) * t;  // u, u(n−1), u(n+1), 1/M
-  if (options_.assembly == ForceAssembly::gather)
+  if (options_.assembly == ForceAssembly::tiled)
+    b -= double(e_) * 36;  // no node-id lists and collection lists: the tile tables (below)
+  if (options_.assembly == ForceAssembly::tiled)
+    b += double(tile_window_.bytes() + tile_slot_.bytes() + tile_layers_.bytes());
+  else if (options_.assembly == ForceAssembly::gather)
     b += double(e_) * 8 * 3 * t * 2 + double(e_) * 8 * 4 +
          double(n_) * 4;  // forces out + in, incidence
   else

@@ -87,6 +87,8 @@ SINEW_HD_INLINE T element_forces(const Vec3<T> (&u)[8], T h, const ElementRow<T>
                                  const MuscleEntries<T>& muscles, Vec3<T> (&fe)[8], double& strain,
                                  double& hourglass) {
   const Mat3<T> f = hex8_deformation_gradient(u, h);
+  Vec3<T> q[4];  // hourglass projections, taken before the stress so that u is no longer needed
+  if constexpr (kHourglass) hourglass_projections(u, q);
   const T j = determinant(f);
   const SymMat3<T> cg = transpose_product(f);
   const T v0 = h * h * h;
@@ -94,8 +96,9 @@ SINEW_HD_INLINE T element_forces(const Vec3<T> (&u)[8], T h, const ElementRow<T>
       element_stress<T, kElastic, kMuscle, kEnergy>(cg, j, row, muscles, v0, strain);
   hex8_nodal_forces(f, s, h, fe);
   if constexpr (kHourglass)
-    hourglass += double(add_hourglass_forces(u, row.hourglass_k, fe, kEnergy));
+    hourglass += double(add_hourglass_projection_forces(q, row.hourglass_k, fe, kEnergy));
   (void)hourglass;
+  (void)q;
   return j;
 }
 

@@ -63,22 +63,30 @@ SINEW_HD_INLINE T hourglass_stiffness(T kappa_hg, T modulus, T h) {
   return kappa_hg * modulus * T(3) * h / T(16);
 }
 
-// Adds the hourglass forces of the cube to f (N) and returns the hourglass energy (J) when
-// `energy` is true (0 otherwise). u: nodal displacements, m; k from hourglass_stiffness.
-// Uses γα = Γα (exact for the cube).
+// The four projections q(α, i) = Σ_b Γα(b) u(b, i) of the nodal displacements u (m), γα = Γα
+// (exact for the cube).
 template <typename T>
-SINEW_HD_INLINE T add_hourglass_forces(const Vec3<T> (&u)[8], T k, Vec3<T> (&f)[8], bool energy) {
-  T e = T(0);
+SINEW_HD_INLINE void hourglass_projections(const Vec3<T> (&u)[8], Vec3<T> (&q)[4]) {
   for (int alpha = 0; alpha < 4; ++alpha) {
-    Vec3<T> q{T(0), T(0), T(0)};
+    q[alpha] = Vec3<T>{T(0), T(0), T(0)};
     for (int b = 0; b < 8; ++b) {
       const T g = T(hourglass_base(alpha, b));
-      q.x += g * u[b].x;
-      q.y += g * u[b].y;
-      q.z += g * u[b].z;
+      q[alpha].x += g * u[b].x;
+      q[alpha].y += g * u[b].y;
+      q[alpha].z += g * u[b].z;
     }
-    if (energy) e += T(0.5) * k * dot(q, q);
-    const Vec3<T> kq = k * q;
+  }
+}
+
+// Adds the hourglass forces k Σα Γα(a) q(α) of the projections q to f (N) and returns the
+// hourglass energy ½ k Σ q² (J) when `energy` is true (0 otherwise); k from hourglass_stiffness.
+template <typename T>
+SINEW_HD_INLINE T add_hourglass_projection_forces(const Vec3<T> (&q)[4], T k, Vec3<T> (&f)[8],
+                                                  bool energy) {
+  T e = T(0);
+  for (int alpha = 0; alpha < 4; ++alpha) {
+    if (energy) e += T(0.5) * k * dot(q[alpha], q[alpha]);
+    const Vec3<T> kq = k * q[alpha];
     for (int a = 0; a < 8; ++a) {
       const T g = T(hourglass_base(alpha, a));
       f[a].x += g * kq.x;
@@ -87,6 +95,15 @@ SINEW_HD_INLINE T add_hourglass_forces(const Vec3<T> (&u)[8], T k, Vec3<T> (&f)[
     }
   }
   return e;
+}
+
+// Both: adds the hourglass forces of the cube with displacements u to f and returns the energy
+// (when `energy`). element_forces takes the two steps apart so that u is dead before the stress.
+template <typename T>
+SINEW_HD_INLINE T add_hourglass_forces(const Vec3<T> (&u)[8], T k, Vec3<T> (&f)[8], bool energy) {
+  Vec3<T> q[4];
+  hourglass_projections(u, q);
+  return add_hourglass_projection_forces(q, k, f, energy);
 }
 
 }  // namespace sinew::simulator::physics
