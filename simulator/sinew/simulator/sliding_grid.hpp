@@ -182,6 +182,54 @@ SINEW_HD_INLINE void cells_within(const SurfaceView<T>& s, const Vec3<T>& x, T r
   }
 }
 
+// Visits the cell entries of cells [lo, hi] that may lie within squared distance `bound` of x, in
+// cell order, entries in list order: cells whose walls (axis by axis), then whose content box, lie
+// farther are skipped, and entries whose triangle's box does. visit(t, corners) returns false to
+// stop the walk (then this returns false). `bound` is read anew before every test, so a visitor may
+// shrink it (the closest-point search does, as it finds closer triangles).
+template <typename T, typename Visit>
+SINEW_HD_INLINE bool visit_near_entries(const SurfaceView<T>& s, const Vec3<T>& x,
+                                        const std::int32_t lo[3], const std::int32_t hi[3],
+                                        const T& bound, Visit&& visit) {
+  auto axis_gap = [&](int axis, std::int32_t idx) {
+    const T c0 = s.origin[axis] + T(idx) * s.cell;
+    const T v = x[axis];
+    return v < c0 ? c0 - v : (v > c0 + s.cell ? v - c0 - s.cell : T(0));
+  };
+  for (std::int32_t k = lo[2]; k <= hi[2]; ++k) {
+    const T gz = axis_gap(2, k);
+    if (gz * gz > bound) continue;
+    for (std::int32_t j = lo[1]; j <= hi[1]; ++j) {
+      const T gy = axis_gap(1, j);
+      if (gz * gz + gy * gy > bound) continue;
+      for (std::int32_t i = lo[0]; i <= hi[0]; ++i) {
+        const T gx = axis_gap(0, i);
+        if (gz * gz + gy * gy + gx * gx > bound) continue;
+        const std::int32_t c = (k * s.dims[1] + j) * s.dims[0] + i;
+        // The cell's content box: skip a cell whose triangles cannot reach below the bound.
+        // (Its list range is read alongside: independent loads in flight together.)
+        const Vec3<T> cl = s.cell_boxes[2 * c], ch = s.cell_boxes[2 * c + 1];
+        const std::int32_t q0 = s.cell_offsets[c], q1 = s.cell_offsets[c + 1];
+        if (box_distance2(x, cl, ch) > bound) continue;
+        // Entries in groups (cell_entry_group): each entry's corners and id are one read, the box
+        // bound first, then the visit on the same registers, entries in list order.
+        for (std::int32_t g = q0; g < q1; g += kEntryGroup) {
+          CellEntryGroup<T> e;
+          load_cell_entries(s, g, q1, e);
+          for (int m = 0; m < kEntryGroup; ++m) {
+            if (e.t[m] < 0) continue;
+            Vec3<T> bl, bh;
+            triangle_box(e.v[m][0], e.v[m][1], e.v[m][2], bl, bh);
+            if (box_distance2(x, bl, bh) > bound) continue;
+            if (!visit(e.t[m], e.v[m])) return false;
+          }
+        }
+      }
+    }
+  }
+  return true;
+}
+
 // Closest point of the surface to x; `triangle` in: warm start (or −1), out: closest triangle.
 // Among triangles at exactly the same distance the warm start wins, then (kLowestIdTies false) the
 // first met in cell order, or (kLowestIdTies true) the lowest triangle id: a rule that does not
@@ -203,52 +251,17 @@ SINEW_HD_INLINE Vec3<T> closest_surface_search(const SurfaceView<T>& s, const Ve
   }
   std::int32_t lo[3], hi[3];
   cells_within(s, x, std::sqrt(best), lo, hi);
-  // Cells farther from x than the best distance so far cannot hold a closer triangle.
-  auto axis_gap = [&](int axis, std::int32_t idx) {
-    const T c0 = s.origin[axis] + T(idx) * s.cell;
-    const T v = x[axis];
-    return v < c0 ? c0 - v : (v > c0 + s.cell ? v - c0 - s.cell : T(0));
-  };
-  for (std::int32_t k = lo[2]; k <= hi[2]; ++k) {
-    const T gz = axis_gap(2, k);
-    if (gz * gz > best) continue;
-    for (std::int32_t j = lo[1]; j <= hi[1]; ++j) {
-      const T gy = axis_gap(1, j);
-      if (gz * gz + gy * gy > best) continue;
-      for (std::int32_t i = lo[0]; i <= hi[0]; ++i) {
-        const T gx = axis_gap(0, i);
-        if (gz * gz + gy * gy + gx * gx > best) continue;
-        const std::int32_t c = (k * s.dims[1] + j) * s.dims[0] + i;
-        // The cell's content box: skip a cell whose triangles cannot reach below the best so far.
-        // (Its list range is read alongside: independent loads in flight together.)
-        const Vec3<T> cl = s.cell_boxes[2 * c], ch = s.cell_boxes[2 * c + 1];
-        const std::int32_t q0 = s.cell_offsets[c], q1 = s.cell_offsets[c + 1];
-        if (box_distance2(x, cl, ch) > best) continue;
-        // Entries in groups (cell_entry_group): each entry's corners and id are one read, the box
-        // bound first, then the exact test on the same registers, entries in list order.
-        for (std::int32_t g = q0; g < q1; g += kEntryGroup) {
-          CellEntryGroup<T> e;
-          load_cell_entries(s, g, q1, e);
-          for (int m = 0; m < kEntryGroup; ++m) {
-            const std::int32_t t = e.t[m];
-            if (t < 0) continue;
-            Vec3<T> bl, bh;
-            triangle_box(e.v[m][0], e.v[m][1], e.v[m][2], bl, bh);
-            if (box_distance2(x, bl, bh) > best) continue;
-            if (t == best_t) continue;
-            const Vec3<T> p =
-                physics::closest_point_on_triangle(x, e.v[m][0], e.v[m][1], e.v[m][2]);
-            const T d = squared_norm(x - p);
-            if (d < best || (kLowestIdTies && d == best && best_t != warm && t < best_t)) {
-              best = d;
-              best_p = p;
-              best_t = t;
-            }
-          }
-        }
-      }
+  visit_near_entries(s, x, lo, hi, best, [&](std::int32_t t, const Vec3<T>(&v)[3]) {
+    if (t == best_t) return true;
+    const Vec3<T> p = physics::closest_point_on_triangle(x, v[0], v[1], v[2]);
+    const T d = squared_norm(x - p);
+    if (d < best || (kLowestIdTies && d == best && best_t != warm && t < best_t)) {
+      best = d;
+      best_p = p;
+      best_t = t;
     }
-  }
+    return true;
+  });
   triangle = best_t;
   return best_p;
 }
@@ -289,35 +302,18 @@ SINEW_HD_INLINE std::int32_t collect_surface_candidates(const SurfaceView<T>& s,
   std::int32_t lo[3], hi[3];
   cells_within(s, x, radius, lo, hi);
   std::int32_t count = 0;
-  for (std::int32_t k = lo[2]; k <= hi[2]; ++k)
-    for (std::int32_t j = lo[1]; j <= hi[1]; ++j)
-      for (std::int32_t i = lo[0]; i <= hi[0]; ++i) {
-        const std::int32_t c = (k * s.dims[1] + j) * s.dims[0] + i;
-        const Vec3<T> cl = s.cell_boxes[2 * c], ch = s.cell_boxes[2 * c + 1];
-        const std::int32_t q0 = s.cell_offsets[c], q1 = s.cell_offsets[c + 1];
-        if (box_distance2(x, cl, ch) > r2) continue;
-        for (std::int32_t g = q0; g < q1; g += kEntryGroup) {
-          CellEntryGroup<T> e;
-          load_cell_entries(s, g, q1, e);
-          for (int m = 0; m < kEntryGroup; ++m) {
-            const std::int32_t t = e.t[m];
-            if (t < 0) continue;
-            Vec3<T> bl, bh;
-            triangle_box(e.v[m][0], e.v[m][1], e.v[m][2], bl, bh);
-            if (box_distance2(x, bl, bh) > r2) continue;
-            const Vec3<T> p =
-                physics::closest_point_on_triangle(x, e.v[m][0], e.v[m][1], e.v[m][2]);
-            if (squared_norm(x - p) > r2) continue;
-            bool seen = false;
-            for (std::int32_t n = 0; n < count && !seen; ++n) seen = list[n * stride] == t;
-            if (seen) continue;
-            if (count == capacity) return -1;
-            list[count * stride] = t;
-            ++count;
-          }
-        }
-      }
-  return count;
+  const bool complete =
+      visit_near_entries(s, x, lo, hi, r2, [&](std::int32_t t, const Vec3<T>(&v)[3]) {
+        const Vec3<T> p = physics::closest_point_on_triangle(x, v[0], v[1], v[2]);
+        if (squared_norm(x - p) > r2) return true;
+        for (std::int32_t n = 0; n < count; ++n)
+          if (list[n * stride] == t) return true;
+        if (count == capacity) return false;
+        list[count * stride] = t;
+        ++count;
+        return true;
+      });
+  return complete ? count : -1;
 }
 
 // Closest point of the listed triangles (count ≥ 1) to x, with the rule of
