@@ -94,12 +94,35 @@ TEST(LatticeTiles, AutomaticAssemblyFollowsTheRedundancy) {
   const auto ts = make_lattice_tiles(slab.node_lattice, slab.element_lattice, min_tiles);
   EXPECT_EQ(ts.layers, 5);
   EXPECT_NEAR(tile_redundancy(ts, slab.element_count()), 1.132, 0.002);
+  EXPECT_NEAR(tile_fill(ts), 0.647, 0.002);
   EXPECT_TRUE(tiles_pay_off(ts, slab.element_count()));
   const auto block = make_skin_block_model();
   const auto tb = make_lattice_tiles(block.node_lattice, block.element_lattice, min_tiles);
   EXPECT_LT(tb.layers, 10);
   EXPECT_GT(tile_redundancy(tb, block.element_count()), 1.6);
   EXPECT_FALSE(tiles_pay_off(tb, block.element_count()));
+}
+
+// A thin shell curving through many lattice layers (4 voxels thick, rising one layer every 4
+// voxels in x, like a forehead voxelized in a box): few slots of a tile's layers hold an element,
+// so tiles do not pay off, and with max_paying_slots they are not even built.
+TEST(LatticeTiles, CurvedShellStaysGathered) {
+  formats::Model shell;
+  for (int k = 0; k < 93; ++k)  // sorted by (k, j, i)
+    for (int j = 0; j < 90; ++j)
+      for (int i = 0; i < 360; ++i)
+        if (k >= i / 4 && k < i / 4 + 4) shell.element_lattice.push_back({i, j, k});
+  formats::build_lattice_topology(shell);
+  const std::size_t e = shell.element_count();
+  const auto t = make_lattice_tiles(shell.node_lattice, shell.element_lattice, 132);
+  EXPECT_EQ(t.layers, 94);  // 25 × 7 columns: one z chunk over all 94 node layers
+  EXPECT_LT(tile_redundancy(t, e), kTiledMaxRedundancy);
+  EXPECT_LT(tile_fill(t), 0.1);
+  EXPECT_FALSE(tiles_pay_off(t, e));
+  const auto none =
+      make_lattice_tiles(shell.node_lattice, shell.element_lattice, 132, max_paying_slots(e));
+  EXPECT_EQ(none.count(), 0u);
+  EXPECT_FALSE(tiles_pay_off(none, e));
 }
 
 }  // namespace

@@ -1101,9 +1101,11 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     muscles_ = mp.size();
   }
   if (options.assembly == ForceAssembly::tiled || options.assembly == ForceAssembly::automatic) {
-    const LatticeTiles tiles =
-        make_lattice_tiles(model.node_lattice, model.element_lattice,
-                           std::size_t(options.tiles_per_sm) * std::size_t(sm_count_));
+    // automatic: tiles too many to pay off are not built (max_paying_slots).
+    const LatticeTiles tiles = make_lattice_tiles(
+        model.node_lattice, model.element_lattice,
+        std::size_t(options.tiles_per_sm) * std::size_t(sm_count_),
+        options.assembly == ForceAssembly::automatic ? max_paying_slots(e_) : SIZE_MAX);
     if (options.assembly == ForceAssembly::automatic)
       options_.assembly = tiles_pay_off(tiles, e_) ? ForceAssembly::tiled : ForceAssembly::gather;
     if (options_.assembly == ForceAssembly::tiled) {

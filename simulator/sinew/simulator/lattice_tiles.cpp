@@ -36,8 +36,8 @@ class DenseIndex {
 }  // namespace
 
 LatticeTiles make_lattice_tiles(const std::vector<Lattice>& node_lattice,
-                                const std::vector<Lattice>& element_lattice,
-                                std::size_t min_tiles) {
+                                const std::vector<Lattice>& element_lattice, std::size_t min_tiles,
+                                std::size_t max_slots) {
   LatticeTiles t;
   if (node_lattice.empty()) return t;
   Lattice lo{std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max(),
@@ -49,9 +49,6 @@ LatticeTiles make_lattice_tiles(const std::vector<Lattice>& node_lattice,
       lo[d] = std::min(lo[d], p[d]);
       hi[d] = std::max(hi[d], p[d]);
     }
-  const DenseIndex nodes(node_lattice, lo, hi);
-  const DenseIndex elements(element_lattice, lo, hi);  // element bases lie inside the node box
-
   const int tx = (hi[0] - lo[0]) / kTileNodes + 1, ty = (hi[1] - lo[1]) / kTileNodes + 1;
   const int nz = hi[2] - lo[2] + 1;
   // Columns that hold any node (an empty column gives no tile in any chunk).
@@ -63,6 +60,9 @@ LatticeTiles make_lattice_tiles(const std::vector<Lattice>& node_lattice,
   int chunks = 1;
   while (chunks < nz && columns * std::size_t(chunks) < min_tiles) ++chunks;
   t.layers = (nz + chunks - 1) / chunks;
+  if (double(columns) * double(chunks) * double(t.slot_stride()) > double(max_slots)) return t;
+  const DenseIndex nodes(node_lattice, lo, hi);
+  const DenseIndex elements(element_lattice, lo, hi);  // element bases lie inside the node box
 
   const std::size_t ws = t.window_stride(), ss = t.slot_stride();
   for (int cz = 0; cz * t.layers < nz; ++cz)
@@ -100,14 +100,26 @@ LatticeTiles make_lattice_tiles(const std::vector<Lattice>& node_lattice,
   return t;
 }
 
+namespace {
+std::size_t computed_slots(const LatticeTiles& tiles) {
+  return std::size_t(std::count_if(tiles.slot_element.begin(), tiles.slot_element.end(),
+                                   [](std::int32_t e) { return e >= 0; }));
+}
+}  // namespace
+
 double tile_redundancy(const LatticeTiles& tiles, std::size_t elements) {
-  const auto computed = std::count_if(tiles.slot_element.begin(), tiles.slot_element.end(),
-                                      [](std::int32_t e) { return e >= 0; });
-  return elements ? double(computed) / double(elements) : 1.0;
+  return elements ? double(computed_slots(tiles)) / double(elements) : 1.0;
+}
+
+double tile_fill(const LatticeTiles& tiles) {
+  return tiles.slot_element.empty()
+             ? 0.0
+             : double(computed_slots(tiles)) / double(tiles.slot_element.size());
 }
 
 bool tiles_pay_off(const LatticeTiles& tiles, std::size_t elements) {
-  return tiles.count() > 0 && tile_redundancy(tiles, elements) <= kTiledMaxRedundancy;
+  return tiles.count() > 0 && tile_redundancy(tiles, elements) <= kTiledMaxRedundancy &&
+         tile_fill(tiles) >= kTiledMinFill;
 }
 
 }  // namespace sinew::simulator

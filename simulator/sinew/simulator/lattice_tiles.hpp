@@ -17,6 +17,7 @@
 //  - tile_layers: node layers the tile really has (≤ layers).
 // The tile's own nodes are window points 1 .. kTileNodes of window layers 1 .. tile_layers.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -41,20 +42,32 @@ struct LatticeTiles {
 // Tiles over the present nodes (lattice coordinates, any order; ids are positions in the vectors).
 // The z chunk is the smallest that still gives at least `min_tiles` tiles (all layers in one tile
 // when the x-y tiling alone gives that many): fewer, taller tiles compute fewer rim elements twice.
+// When the tiles would hold more than `max_slots` element slots in all (every tile's slot_stride,
+// counted before anything is built), returns no tiles (count() == 0).
 LatticeTiles make_lattice_tiles(const std::vector<std::array<std::int32_t, 3>>& node_lattice,
                                 const std::vector<std::array<std::int32_t, 3>>& element_lattice,
-                                std::size_t min_tiles);
+                                std::size_t min_tiles, std::size_t max_slots = SIZE_MAX);
 
 // Elements computed by the tiles per model element (≥ 1: rim elements are computed by every tile
 // they touch, and z chunks repeat one element layer).
 double tile_redundancy(const LatticeTiles& tiles, std::size_t elements);
+// The share of the tiles' element slots that hold an element (a tile block walks every slot of
+// every layer: a thin shell curving through many layers leaves most of them empty).
+double tile_fill(const LatticeTiles& tiles);
 
 // Whether tiled assembly should pay off (ForceAssembly::automatic): the tiles compute at most
-// kTiledMaxRedundancy times the model's elements. Measured on one H200 (docs/performance.md): the
-// face-scale slab (1.13, one z chunk) ran 1.22× faster tiled than gathered; the skin block (9 voxel
-// layers cut into z chunks) and the 15k body were faster gathered.
+// kTiledMaxRedundancy times the model's elements, and at least kTiledMinFill of their slots hold
+// one. Measured on one H200 (docs/performance.md): the face-scale slab (redundancy 1.13, fill 0.65,
+// one z chunk) ran 1.4× faster tiled than gathered; the skin block (9 voxel layers cut into z
+// chunks, redundancy > 1.6) and the sparse 15k body were faster gathered.
 inline constexpr double kTiledMaxRedundancy = 1.25;
+inline constexpr double kTiledMinFill = 0.5;
 bool tiles_pay_off(const LatticeTiles& tiles, std::size_t elements);
+// The most slots tiles of a model of `elements` elements can have and still pay off (for
+// make_lattice_tiles' max_slots: slots ≥ computed / fill, computed ≤ redundancy × elements).
+inline std::size_t max_paying_slots(std::size_t elements) {
+  return std::size_t(kTiledMaxRedundancy / kTiledMinFill * double(elements));
+}
 
 // The entries a tile node sums, in the fixed gather order (ascending element id, as the CPU's
 // incidence; physics::gather_node_force): the node at window point (wx, wy) of node layer k takes
