@@ -202,12 +202,20 @@ int main(int argc, char** argv) {
       std::printf("  %-66s %9.4f ms/step\n", label.c_str(), t.ms_per_step);
     };
     if (c.setup.effects.sliding) {
-      for (double skin : {0.02, 0.1, 0.25})  // the default, 0.05, is `base`
-        with_option("sliding skin " + std::to_string(skin).substr(0, 4) + " cells (default 0.05)",
-                    kDefault, [&](CudaOptions& o) { o.sliding_skin = skin; });
-      for (int every : {1, 2, 8})  // the default, 4, is `base`
-        with_option("sliding lists refreshed every " + std::to_string(every) + " steps (default 4)",
-                    kDefault, [&](CudaOptions& o) { o.sliding_refresh_interval = every; });
+      const CudaOptions defaults;
+      char label[96];
+      for (double skin : {0.02, 0.05, 0.1, 0.25}) {
+        if (skin == defaults.sliding_skin) continue;  // that is `base`
+        std::snprintf(label, sizeof label, "sliding skin %g cells (default %g)", skin,
+                      defaults.sliding_skin);
+        with_option(label, kDefault, [&](CudaOptions& o) { o.sliding_skin = skin; });
+      }
+      for (int every : {1, 2, 4, 8, 16}) {
+        if (every == defaults.sliding_refresh_interval) continue;
+        std::snprintf(label, sizeof label, "sliding lists refreshed every %d steps (default %d)",
+                      every, defaults.sliding_refresh_interval);
+        with_option(label, kDefault, [&](CudaOptions& o) { o.sliding_refresh_interval = every; });
+      }
     }
     for (int tps : {1, 2, 4, 6})  // tiled: the default, 3 tiles per SM, is `base` when tiled
       with_option("tiled, " + std::to_string(tps) + " tiles per SM (default 3)",

@@ -286,7 +286,8 @@ constexpr int kCandidates = 32;
 // Per sliding node k: node id, surface, rest distance, closest triangle of the last step (the warm
 // start of the tie rule, as the CPU's), the warm start of the grid searches (written by list
 // refreshes only, so a refresh running beside a step never touches what the step reads), and its
-// candidate list: count (−1: none, search fully), anchor x_s, ids at list[j · count + k].
+// candidate list: count (−1: none, search fully), anchor x_s, ids at list[j · count + k] and their
+// distances from x_s at list_distance[j · count + k] (sorted: collect_surface_candidates).
 template <typename T>
 struct SlideData {
   const std::int32_t* node;
@@ -297,6 +298,7 @@ struct SlideData {
   std::int32_t* list_count;
   Vec3<T>* anchor;
   std::int32_t* list;
+  T* list_distance;
   const SlideSurface<T>* surfaces;
   std::int32_t count;
   Status* status;
@@ -319,18 +321,19 @@ __device__ __forceinline__ void refresh_slide_list(const SlideData<T>& d, std::i
   const Vec3<T> p = closest_surface_search<T, true>(sf.view, x, t);
   d.search_triangle[k] = t;
   const T d1 = std::sqrt(squared_norm(x - p));
-  d.list_count[k] =
-      collect_surface_candidates(sf.view, x, d1 + T(2) * skin, d.list + k, d.count, kCandidates);
+  d.list_count[k] = collect_surface_candidates(sf.view, x, d1 + T(2) * skin, d.list + k,
+                                               d.list_distance + k, d.count, kCandidates);
   d.anchor[k] = x;
 }
 
-// Sliding node k at displacement u: the closest triangle among its listed ones (or the one the
-// search found, when its list overflowed), then x' = p + d n (physics::project_to_rest_distance),
-// as physics::slide_node does. Returns the new displacement. kRefresh: refresh_slide_list at x
-// first (the grid search inline when needed). Otherwise slide_refresh_kernel refreshed the list
-// from u(n), ahead of the step: if x is not within s of its anchor (or the list overflowed) the
-// list may not hold the closest triangle, so the node raises status->slide_miss and the host
-// replays the batch with kRefresh (the result computed here is then discarded).
+// Sliding node k at displacement u: the closest triangle among its listed ones and its warm start
+// (closest_listed_point; the one the search found, when its list overflowed), then x' = p + d n
+// (physics::project_to_rest_distance), as physics::slide_node does. Returns the new
+// displacement. kRefresh: refresh_slide_list at x first (the grid search inline when needed).
+// Otherwise slide_refresh_kernel refreshed the list from u(n), ahead of the step: if x is not
+// within s of its anchor (or the list overflowed) the list may not hold the closest triangle, so
+// the node raises status->slide_miss and the host replays the batch with kRefresh (the result
+// computed here is then discarded).
 template <typename T, bool kRefresh>
 __device__ __forceinline__ Vec3<T> slide_entry(const SlideData<T>& d, std::int32_t k,
                                                const Vec3<T>& rest, const Vec3<T>& u) {
@@ -347,7 +350,10 @@ __device__ __forceinline__ Vec3<T> slide_entry(const SlideData<T>& d, std::int32
   const std::int32_t listed = d.list_count[k];
   Vec3<T> p;
   if (listed > 0) {
-    p = closest_listed_point(sf.corners, d.list + k, d.count, listed, x, t);
+    const Vec3<T> warm[3] = {sf.corners[3 * t], sf.corners[3 * t + 1], sf.corners[3 * t + 2]};
+    const T moved = std::sqrt(squared_norm(x - d.anchor[k]));
+    p = closest_listed_point(sf.corners, warm, d.list + k, d.list_distance + k, d.count, listed, x,
+                             moved, sf.skin * T(0.0625), t);
   } else if constexpr (kRefresh) {  // overflow: the grid search, warm-started as the CPU's
     p = closest_surface_search<T, true>(sf.view, x, t);
   } else {  // overflow without a search: a miss (raised above), replayed; any finite point
@@ -990,6 +996,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<std::int32_t> slide_node_, slide_surface_, slide_triangle_, snap_triangle_;
   DeviceArray<std::int32_t> slide_search_triangle_;
   DeviceArray<std::int32_t> slide_list_count_, slide_list_;
+  DeviceArray<T> slide_list_distance_;
   DeviceArray<Vec3<T>> slide_anchor_;
   SlideData<T> slide_data() const {
     return {slide_node_.get(),
@@ -1000,6 +1007,7 @@ class CudaEngine final : public Backend, public CudaTiming {
             slide_list_count_.get(),
             slide_anchor_.get(),
             slide_list_.get(),
+            slide_list_distance_.get(),
             slide_surfaces_.get(),
             std::int32_t(slide_node_.size()),
             status_.get()};
@@ -1266,6 +1274,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     slide_search_triangle_.upload(prep_.slide_triangle);
     slide_list_count_.allocate(prep_.slide_node.size());
     slide_list_.allocate(prep_.slide_node.size() * kCandidates);
+    slide_list_distance_.allocate(prep_.slide_node.size() * kCandidates);
     slide_anchor_.allocate(prep_.slide_node.size());
     forget_slide_lists(stream_);
     std::vector<T> d(prep_.slide_distance.begin(), prep_.slide_distance.end());
@@ -2090,9 +2099,11 @@ double CudaEngine<T>::bytes_per_step() const {
   if (setup_.effects.muscles)
     b += double(prep_.muscle_id.size()) * (4 + t + 3 * t) + double(e_) * 4;
   // Sliding nodes (constraint program, listed path): node id, offsets, op, surface, rest distance,
-  // triangle read + written, list count, anchor, u(n+1) read + written, rest, ≈ 4 listed ids (the
-  // listed triangles' corners come from L2 and are not counted).
-  b += double(prep_.slide_node.size()) * (4 + 4 + 4 + 4 + t + 8 + 4 + 3 * t + 6 * t + 3 * t + 16);
+  // triangle read + written, list count, anchor, u(n+1) read + written, rest, the first two listed
+  // ids and distances (most nodes test their warm start only; the triangles' corners come from L2
+  // and are not counted).
+  b += double(prep_.slide_node.size()) *
+       (4 + 4 + 4 + 4 + t + 8 + 4 + 3 * t + 6 * t + 3 * t + 8 + 2 * t);
   return b;
 }
 

@@ -272,13 +272,18 @@ SINEW_HD_INLINE Vec3<T> closest_surface_point(const SurfaceView<T>& s, const Vec
   return closest_surface_search<T, false>(s, x, triangle);
 }
 
-// Candidate lists (Verlet lists with a skin, exact): after a full search at x_s with closest
-// distance d1, list every triangle within d1 + 2 s of x_s. While the node stays within s of x_s,
-// its closest triangle is in the list: for |x − x_s| ≤ s, the closest triangle T* at x has
+// Candidate lists (Verlet lists with a skin, exact): after a full search at the anchor x_s with
+// closest distance d1, list every triangle within d1 + 2 s of x_s. While the node stays within s
+// of x_s, its closest triangle is in the list: for |x − x_s| ≤ s, the closest triangle T* at x has
 // dist(x, T*) ≤ dist(x, T1) ≤ d1 + s, so dist(x_s, T*) ≤ d1 + 2 s. Only the listed triangles are
 // then tested, with the lowest-id tie rule of closest_surface_search<T, true> (warm start first),
 // so both paths return the same triangle. The move test uses s (1 − 1e-3): the margin covers float
 // round-off in the listed distances (s is a fraction of a cell, far above it).
+//
+// Each entry also keeps D_j = dist(x_s, T_j), the list sorted by it. At x with δ = |x − x_s|,
+// dist(x, T_j) ≥ D_j − δ, so once the warm start (distance d_w) is tested, every entry with
+// D_j > d_w + δ + μ is strictly farther than it, can neither win nor tie, and ends the walk: most
+// nodes test their warm start only (μ: closest_listed_point).
 
 // Per triangle its three corners (3 per triangle), in the query's scalar, for the listed tests.
 template <typename T>
@@ -291,11 +296,12 @@ std::vector<Vec3<T>> triangle_corner_list(
   return c;
 }
 
-// Every triangle within `radius` of x into list[j · stride], j < capacity, each once, in cell
-// order; returns their count, or −1 when more than `capacity` (no list: the node searches fully).
+// Every triangle within `radius` of x into list[j · stride] with its distance from x in
+// distance[j · stride], j < capacity, each once, sorted by (distance, id); returns their count, or
+// −1 when more than `capacity` (no list: the node searches fully).
 template <typename T>
 SINEW_HD_INLINE std::int32_t collect_surface_candidates(const SurfaceView<T>& s, const Vec3<T>& x,
-                                                        T radius, std::int32_t* list,
+                                                        T radius, std::int32_t* list, T* distance,
                                                         std::int64_t stride,
                                                         std::int32_t capacity) {
   const T r2 = radius * radius;
@@ -305,44 +311,73 @@ SINEW_HD_INLINE std::int32_t collect_surface_candidates(const SurfaceView<T>& s,
   const bool complete =
       visit_near_entries(s, x, lo, hi, r2, [&](std::int32_t t, const Vec3<T>(&v)[3]) {
         const Vec3<T> p = physics::closest_point_on_triangle(x, v[0], v[1], v[2]);
-        if (squared_norm(x - p) > r2) return true;
+        const T d2 = squared_norm(x - p);
+        if (d2 > r2) return true;
         for (std::int32_t n = 0; n < count; ++n)
           if (list[n * stride] == t) return true;
         if (count == capacity) return false;
-        list[count * stride] = t;
-        ++count;
+        // Insertion into the sorted list (lists hold a few entries).
+        const T d = std::sqrt(d2);
+        std::int32_t n = count++;
+        for (; n > 0; --n) {
+          const T dn = distance[(n - 1) * stride];
+          const std::int32_t tn = list[(n - 1) * stride];
+          if (dn < d || (dn == d && tn < t)) break;
+          list[n * stride] = tn;
+          distance[n * stride] = dn;
+        }
+        list[n * stride] = t;
+        distance[n * stride] = d;
         return true;
       });
   return complete ? count : -1;
 }
 
-// Closest point of the listed triangles (count ≥ 1) to x, with the rule of
-// closest_surface_search<T, true>: strictly closer wins; on equal distance the warm start, then
-// the lowest id. `triangle` in: warm start, out: closest triangle. corners: triangle_corner_list.
+// Closest point to x of the listed triangles (count ≥ 1, sorted as collect_surface_candidates
+// leaves them) and the warm start, with the rule of closest_surface_search<T, true>: strictly
+// closer wins; on equal distance the warm start, then the lowest id. `triangle` in: the warm start
+// (a valid triangle id; warm: its corners), out: the closest triangle. corners:
+// triangle_corner_list. moved: δ, the distance of x from the list's anchor. margin: μ > 0, covering
+// the float round-off of D_j, δ and the tested distances (callers give s/16: far above round-off,
+// far below the gaps that cull).
 template <typename T>
-SINEW_HD_INLINE Vec3<T> closest_listed_point(const Vec3<T>* corners, const std::int32_t* list,
+SINEW_HD_INLINE Vec3<T> closest_listed_point(const Vec3<T>* corners, const Vec3<T> (&warm)[3],
+                                             const std::int32_t* list, const T* distance,
                                              std::int64_t stride, std::int32_t count,
-                                             const Vec3<T>& x, std::int32_t& triangle) {
-  const std::int32_t warm = triangle;
-  Vec3<T> best_p{T(0), T(0), T(0)};
-  T best = T(0);
-  std::int32_t best_t = -1;
-  // Two entries at a time: their ids, then their corners, are independent loads in flight
-  // together (a GPU thread otherwise waits one list → corners latency per entry; four at a time
-  // spilled registers in the CUDA constraint kernel).
+                                             const Vec3<T>& x, T moved, T margin,
+                                             std::int32_t& triangle) {
+  const std::int32_t warm_t = triangle;
+  // Two entries at a time: their ids and distances (the first two read before the warm start's
+  // test: no load waits on it), then their corners, are loads in flight together.
   constexpr int kGroup = 2;
+  std::int32_t ts[kGroup];
+  T ds[kGroup];
+  auto load_group = [&](std::int32_t m0) {
+    for (int j = 0; j < kGroup; ++j) {
+      const bool in = m0 + j < count;
+      ts[j] = in ? list[(m0 + j) * stride] : -1;
+      ds[j] = in ? distance[(m0 + j) * stride] : T(0);
+    }
+  };
+  load_group(0);
+  Vec3<T> best_p = physics::closest_point_on_triangle(x, warm[0], warm[1], warm[2]);
+  T best = squared_norm(x - best_p);
+  std::int32_t best_t = warm_t;
+  const T bound = std::sqrt(best) + moved + margin;
   for (std::int32_t m0 = 0; m0 < count; m0 += kGroup) {
-    std::int32_t ts[kGroup];
-    for (int j = 0; j < kGroup; ++j) ts[j] = m0 + j < count ? list[(m0 + j) * stride] : -1;
+    if (m0 > 0) load_group(m0);
+    if (ds[0] > bound) break;  // this entry and all after it are strictly farther
     Vec3<T> c[kGroup][3];
-    for (int j = 0; j < kGroup; ++j)
+    for (int j = 0; j < kGroup; ++j) {
+      if (ts[j] == warm_t || ds[j] > bound) ts[j] = -1;
       for (int v = 0; v < 3; ++v) c[j][v] = ts[j] >= 0 ? corners[3 * ts[j] + v] : x;
+    }
     for (int j = 0; j < kGroup; ++j) {
       const std::int32_t t = ts[j];
       if (t < 0) continue;
       const Vec3<T> p = physics::closest_point_on_triangle(x, c[j][0], c[j][1], c[j][2]);
       const T d = squared_norm(x - p);
-      if (best_t < 0 || d < best || (d == best && best_t != warm && (t == warm || t < best_t))) {
+      if (d < best || (d == best && best_t != warm_t && t < best_t)) {
         best = d;
         best_p = p;
         best_t = t;
