@@ -201,10 +201,12 @@ int main(int argc, char** argv) {
       const Timing t = time_gpu(c, s, a, launches, o);
       std::printf("  %-66s %9.4f ms/step\n", label.c_str(), t.ms_per_step);
     };
+    with_option("plain launches (no programmatic dependent launch)", kDefault,
+                [](CudaOptions& o) { o.programmatic_launch = false; });
     if (c.setup.effects.sliding) {
       const CudaOptions defaults;
       char label[96];
-      for (double skin : {0.02, 0.05, 0.1, 0.25}) {
+      for (double skin : {0.02, 0.05, 0.1, 0.25, 0.35}) {
         if (skin == defaults.sliding_skin) continue;  // that is `base`
         std::snprintf(label, sizeof label, "sliding skin %g cells (default %g)", skin,
                       defaults.sliding_skin);

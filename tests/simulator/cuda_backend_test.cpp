@@ -117,12 +117,9 @@ TEST(CudaBackend, GatherAssemblyIsBitReproducibleFromRunToRun) {
   EXPECT_LT(measure, 1e-3);
 }
 
-// Tiled assembly sums the same element entries in the same order as gather (lattice_tiles.hpp):
-// on a model with sliding, muscles and gravity (float and double), on a skin block whose loads run
-// in the node program, and on a sparse lattice (the soft body under gravity) it gives gather's
-// results; the figure printed says whether they are bit-identical.
-TEST(CudaBackend, TiledAssemblyGivesGathersResults) {
-  SKIP_WITHOUT_GPU();
+// A model with sliding, muscles and gravity (float and double), a skin block whose loads run in
+// the node program, and a sparse lattice (the soft body under gravity).
+std::vector<std::pair<std::string, Scene>> assembly_scenes() {
   std::vector<std::pair<std::string, Scene>> scenes;
   scenes.emplace_back("muscles + sliding, float", muscle_sliding_scene(Precision::float32));
   scenes.emplace_back("muscles + sliding, double", muscle_sliding_scene(Precision::float64));
@@ -152,7 +149,15 @@ TEST(CudaBackend, TiledAssemblyGivesGathersResults) {
     s.setup.rigid_nodes = node_set_ids(s.model, "feet");
     scenes.emplace_back("soft body, gravity, float", std::move(s));
   }
-  for (const auto& [name, s] : scenes) {
+  return scenes;
+}
+
+// Tiled assembly sums the same element entries in the same order as gather (lattice_tiles.hpp): on
+// the assembly scenes it gives gather's results; the figure printed says whether they are
+// bit-identical.
+TEST(CudaBackend, TiledAssemblyGivesGathersResults) {
+  SKIP_WITHOUT_GPU();
+  for (const auto& [name, s] : assembly_scenes()) {
     CudaOptions gather, tiled;
     gather.assembly = ForceAssembly::gather;
     tiled.assembly = ForceAssembly::tiled;
@@ -174,17 +179,44 @@ TEST(CudaBackend, TiledAssemblyGivesGathersResults) {
   }
 }
 
+// Programmatic dependent launches (the default on sm_90 and later) change when a kernel's blocks
+// start, not what they compute: the same bits as plain launches on the assembly scenes, gathered
+// and tiled (the sliding scene reads its warm starts and lists before the wait, and forks list
+// refreshes beside the step).
+TEST(CudaBackend, ProgrammaticLaunchesGiveThePlainLaunchesResults) {
+  SKIP_WITHOUT_GPU();
+  for (const auto& [name, s] : assembly_scenes())
+    for (ForceAssembly assembly : {ForceAssembly::gather, ForceAssembly::tiled}) {
+      CudaOptions plain, programmatic;
+      plain.assembly = programmatic.assembly = assembly;
+      plain.programmatic_launch = false;
+      programmatic.programmatic_launch = true;
+      auto a = make_cuda_backend(s.model, s.setup, plain);
+      auto b = make_cuda_backend(s.model, s.setup, programmatic);
+      a->step(700);
+      b->step(700);
+      const auto ua = a->displacements(), ub = b->displacements();
+      ASSERT_GT(max_abs(ua), 1e-9) << name << ": the scene must move";
+      const char* how = assembly == ForceAssembly::gather ? "gather" : "tiled";
+      EXPECT_EQ(0, std::memcmp(ua.data(), ub.data(), ua.size() * sizeof(double)))
+          << name << ", " << how;
+      EXPECT_EQ(a->state().sliding_triangle, b->state().sliding_triangle) << name << ", " << how;
+      EXPECT_EQ(a->energies().external_work, b->energies().external_work) << name << ", " << how;
+    }
+}
+
 // The sliding candidate lists are exact for any skin: a skin so small that nodes leave their lists
-// every step (misses, batch replays, then inline refresh), the default, and a skin so large that
-// lists overflow (full searches) give the same bits, with gather assembly (lists refreshed beside
-// the step) and with tiled assembly (sliding inside the tile kernel, lists refreshed a step ahead).
+// every step (misses, batch replays, then inline refresh), the default, 0.35 cells (longer lists,
+// read before the wait of a programmatic launch), and a skin so large that lists overflow (full
+// searches) give the same bits, with gather and with tiled assembly (lists refreshed beside the
+// step, the constraint kernel after it).
 TEST(CudaBackend, SlidingListsGiveTheSameResultsForAnySkin) {
   SKIP_WITHOUT_GPU();
   const Scene s = muscle_sliding_scene(Precision::float32);
   for (ForceAssembly assembly : {ForceAssembly::gather, ForceAssembly::tiled}) {
     std::vector<double> first;
     std::vector<std::int32_t> first_triangles;
-    for (double skin : {0.05, 1e-6, 3.0}) {
+    for (double skin : {CudaOptions{}.sliding_skin, 0.35, 1e-6, 3.0}) {
       CudaOptions o;
       o.assembly = assembly;
       o.sliding_skin = skin;

@@ -36,7 +36,7 @@ struct CudaOptions {
   // Skin s of the sliding nodes' candidate lists, in grid cells of the surface (about mean edges):
   // a node tests only its listed triangles (those within d1 + 2 s of where it last searched) until
   // it moves more than s, then searches the grid again. Exact for any s > 0; larger: longer lists,
-  // rarer searches (docs/cuda-backend.md, Sliding).
+  // rarer searches (docs/cuda-backend.md, Sliding; docs/performance.md has the sweep).
   double sliding_skin = 0.05;
   // Steps between refreshes of the candidate lists in graph steps (each refresh keeps a node's list
   // while it is within s/2 of its anchor). Exact for any value: a node that moves more than s/2
@@ -46,6 +46,10 @@ struct CudaOptions {
   // those into z chunks only as far as needed for this many tiles (lattice_tiles.hpp): more, shorter
   // tiles fill the GPU better but compute more rim elements twice.
   int tiles_per_sm = 3;
+  // Graph steps launch each kernel that follows another as a programmatic dependent launch (sm_90
+  // and later; ignored below): its blocks start, and load what the kernel before it does not
+  // write, while that kernel finishes (docs/cuda-backend.md, Launches). Same results either way.
+  bool programmatic_launch = true;
 };
 
 // True when the CUDA runtime sees at least one device (false when built without CUDA).

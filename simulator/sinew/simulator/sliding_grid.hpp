@@ -333,39 +333,61 @@ SINEW_HD_INLINE std::int32_t collect_surface_candidates(const SurfaceView<T>& s,
   return complete ? count : -1;
 }
 
+// Entries m0, m0 + 1 of a list (list[j · stride], distance[j · stride]; id −1 from `count` on):
+// closest_listed_point reads a list two entries at a time.
+template <typename T>
+struct ListedGroup {
+  static constexpr int kSize = 2;
+  std::int32_t id[kSize];
+  T distance[kSize];
+};
+
+template <typename T>
+SINEW_HD_INLINE ListedGroup<T> load_listed_group(const std::int32_t* list, const T* distance,
+                                                 std::int64_t stride, std::int32_t count,
+                                                 std::int32_t m0) {
+  ListedGroup<T> g;
+  for (int j = 0; j < ListedGroup<T>::kSize; ++j) {
+    const bool in = m0 + j < count;
+    g.id[j] = in ? list[(m0 + j) * stride] : -1;
+    g.distance[j] = in ? distance[(m0 + j) * stride] : T(0);
+  }
+  return g;
+}
+
 // Closest point to x of the listed triangles (count ≥ 1, sorted as collect_surface_candidates
 // leaves them) and the warm start, with the rule of closest_surface_search<T, true>: strictly
 // closer wins; on equal distance the warm start, then the lowest id. `triangle` in: the warm start
 // (a valid triangle id; warm: its corners), out: the closest triangle. corners:
 // triangle_corner_list. moved: δ, the distance of x from the list's anchor. margin: μ > 0, covering
 // the float round-off of D_j, δ and the tested distances (callers give s/16: far above round-off,
-// far below the gaps that cull).
+// far below the gaps that cull). first: its entries 0 and 1 (load_listed_group), which a caller
+// may have loaded ahead.
 template <typename T>
 SINEW_HD_INLINE Vec3<T> closest_listed_point(const Vec3<T>* corners, const Vec3<T> (&warm)[3],
                                              const std::int32_t* list, const T* distance,
                                              std::int64_t stride, std::int32_t count,
-                                             const Vec3<T>& x, T moved, T margin,
-                                             std::int32_t& triangle) {
+                                             const ListedGroup<T>& first, const Vec3<T>& x, T moved,
+                                             T margin, std::int32_t& triangle) {
   const std::int32_t warm_t = triangle;
   // Two entries at a time: their ids and distances (the first two read before the warm start's
   // test: no load waits on it), then their corners, are loads in flight together.
-  constexpr int kGroup = 2;
+  constexpr int kGroup = ListedGroup<T>::kSize;
   std::int32_t ts[kGroup];
   T ds[kGroup];
-  auto load_group = [&](std::int32_t m0) {
+  auto take_group = [&](const ListedGroup<T>& g) {
     for (int j = 0; j < kGroup; ++j) {
-      const bool in = m0 + j < count;
-      ts[j] = in ? list[(m0 + j) * stride] : -1;
-      ds[j] = in ? distance[(m0 + j) * stride] : T(0);
+      ts[j] = g.id[j];
+      ds[j] = g.distance[j];
     }
   };
-  load_group(0);
+  take_group(first);
   Vec3<T> best_p = physics::closest_point_on_triangle(x, warm[0], warm[1], warm[2]);
   T best = squared_norm(x - best_p);
   std::int32_t best_t = warm_t;
   const T bound = std::sqrt(best) + moved + margin;
   for (std::int32_t m0 = 0; m0 < count; m0 += kGroup) {
-    if (m0 > 0) load_group(m0);
+    if (m0 > 0) take_group(load_listed_group(list, distance, stride, count, m0));
     if (ds[0] > bound) break;  // this entry and all after it are strictly farther
     Vec3<T> c[kGroup][3];
     for (int j = 0; j < kGroup; ++j) {
@@ -386,6 +408,17 @@ SINEW_HD_INLINE Vec3<T> closest_listed_point(const Vec3<T>* corners, const Vec3<
   }
   triangle = best_t;
   return best_p;
+}
+
+template <typename T>
+SINEW_HD_INLINE Vec3<T> closest_listed_point(const Vec3<T>* corners, const Vec3<T> (&warm)[3],
+                                             const std::int32_t* list, const T* distance,
+                                             std::int64_t stride, std::int32_t count,
+                                             const Vec3<T>& x, T moved, T margin,
+                                             std::int32_t& triangle) {
+  return closest_listed_point(corners, warm, list, distance, stride, count,
+                              load_listed_group(list, distance, stride, count, 0), x, moved, margin,
+                              triangle);
 }
 
 }  // namespace sinew::simulator
