@@ -79,6 +79,18 @@ SINEW_HD_INLINE Vec3<T>& operator-=(Vec3<T>& a, const Vec3<T>& b) {
   a.z -= b.z;
   return a;
 }
+// a · b + c. On the GPU one explicit FMA (one rounding) that the compiler cannot contract another
+// way in another kernel, so the kernels sharing a law give the same bits (the tile and the node
+// kernel: docs/cuda-backend.md, tiled = gather); on the host as written.
+template <typename T>
+SINEW_HD_INLINE T multiply_add(T a, T b, T c) {
+#if defined(__CUDA_ARCH__)
+  return fma(a, b, c);
+#else
+  return a * b + c;
+#endif
+}
+
 template <typename T>
 SINEW_HD_INLINE T dot(const Vec3<T>& a, const Vec3<T>& b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;

@@ -33,15 +33,18 @@ SINEW_HD_INLINE double damping_step_factor(double dt, double alpha) {
   return std::sqrt((1.0 - 0.5 * alpha * dt) / (1.0 + 0.5 * alpha * dt));
 }
 
-// One node: u(n+1) = A (R − f) + B u(n) + Cc u(n−1), A = cd.a_over_inverse_mass · inverse_mass.
+// One node: u(n+1) = A (R − f) + B u(n) + Cc u(n−1), A = cd.a_over_inverse_mass · inverse_mass
+// (evaluated as Cc u(n−1) + (B u(n) + A (R − f)) with multiply_add: one order in every kernel, and on
+// the host the same value as the expression left to right).
 template <typename T>
 SINEW_HD_INLINE Vec3<T> central_difference_update(const CentralDifference<T>& cd, T inverse_mass,
                                                   const Vec3<T>& r_minus_f, const Vec3<T>& u,
                                                   const Vec3<T>& u_prev) {
   const T a = cd.a_over_inverse_mass * inverse_mass;
-  return {a * r_minus_f.x + cd.b * u.x + cd.c * u_prev.x,
-          a * r_minus_f.y + cd.b * u.y + cd.c * u_prev.y,
-          a * r_minus_f.z + cd.b * u.z + cd.c * u_prev.z};
+  Vec3<T> next;
+  for (int k = 0; k < 3; ++k)
+    next[k] = multiply_add(cd.c, u_prev[k], multiply_add(cd.b, u[k], a * r_minus_f[k]));
+  return next;
 }
 
 }  // namespace sinew::simulator::physics

@@ -156,7 +156,8 @@ SINEW_HD_INLINE Vec3<T> node_update(const CentralDifference<T>& cd, T inverse_ma
 template <typename T>
 SINEW_HD_INLINE void add_nodal_force(const CentralDifference<T>& cd, T inverse_mass,
                                      const Vec3<T>& fn, Vec3<T>& u_next) {
-  u_next += (cd.a_over_inverse_mass * inverse_mass) * fn;
+  const T a = cd.a_over_inverse_mass * inverse_mass;
+  for (int k = 0; k < 3; ++k) u_next[k] = multiply_add(a, fn[k], u_next[k]);
 }
 
 // Prescribed displacement: the selected components take c · value (m).

@@ -73,7 +73,11 @@ SINEW_HD_INLINE Vec3<T> project_to_rest_distance(const Vec3<T>& x, const Vec3<T>
 // u' = u − (u · n) n for a unit n.
 template <typename T>
 SINEW_HD_INLINE Vec3<T> project_to_plane(const Vec3<T>& u, const Vec3<T>& unit_normal) {
-  return u - dot(u, unit_normal) * unit_normal;
+  const T d =
+      multiply_add(u.z, unit_normal.z, multiply_add(u.y, unit_normal.y, u.x * unit_normal.x));
+  Vec3<T> v;
+  for (int k = 0; k < 3; ++k) v[k] = multiply_add(-d, unit_normal[k], u[k]);
+  return v;
 }
 
 }  // namespace sinew::simulator::physics
