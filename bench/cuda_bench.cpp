@@ -2,12 +2,15 @@
 // ms per step (CUDA events around graph launches, warm-up, median), element-steps per second,
 // achieved bandwidth against a measured device-to-device copy, stage shares from variants that
 // leave one stage out, float/double, gather/atomic/tiled assembly, and the CPU backend on the same machine. Usage:
-// cuda_bench [--quick] [--only NAME] [--profile]. quick: fewer launches, for checking the program;
-// only: the models whose name contains NAME; profile: float, default assembly only, 3 launches after one
-// warm-up, nothing else (for ncu).
+// cuda_bench [--quick] [--only NAME] [--profile] [--launches N] [--sliding-skin S]
+// [--sliding-refresh N]. quick: fewer launches, for checking the program; only: the models whose
+// name contains NAME; profile: float, default assembly only, 3 launches after the warm-up, nothing
+// else, each launch's time printed (for ncu, and for how the step time moves through the scene);
+// launches: N timed launches; sliding-skin, sliding-refresh: those CudaOptions in every run.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <functional>
@@ -95,13 +98,22 @@ struct Timing {
   double ms_per_step = 0, bytes_per_step = 0, dt = 0;
 };
 
+// The options of every run (--sliding-skin, --sliding-refresh); with_option changes one more.
+CudaOptions base_options;
+bool print_each_launch = false;
+
 Timing time_gpu(const Case& c, const Setup& s, ForceAssembly assembly, int launches,
-                CudaOptions o = {}) try {
+                CudaOptions o = base_options) try {
   o.assembly = assembly;
   auto b = make_cuda_backend(c.model, s, o);
   auto* t = dynamic_cast<CudaTiming*>(b.get());
   t->timed_graph_launches(3);  // warm-up
   const auto ms = t->timed_graph_launches(launches);
+  if (print_each_launch) {
+    std::printf("  ms/step of each launch:");
+    for (float m : ms) std::printf(" %.4f", double(m) / t->graph_steps());
+    std::printf("\n");
+  }
   return {median(ms) / t->graph_steps(), t->bytes_per_step(), b->dt()};
 } catch (const std::exception& e) {
   std::printf("  (failed: %s)\n", e.what());
@@ -113,20 +125,42 @@ Timing time_gpu(const Case& c, const Setup& s, ForceAssembly assembly, int launc
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // each figure visible as soon as measured
   bool quick = false, profile = false;
+  int launches = 0;
   std::string only;
+  auto number = [&](int& k, double low) {
+    char* end = nullptr;
+    const double v = k + 1 < argc ? std::strtod(argv[++k], &end) : 0;
+    return end && *end == '\0' && v >= low ? v : -1.0;
+  };
   for (int k = 1; k < argc; ++k) {
+    bool ok = true;
     if (std::strcmp(argv[k], "--quick") == 0) {
       quick = true;
     } else if (std::strcmp(argv[k], "--profile") == 0) {
       profile = true;
     } else if (std::strcmp(argv[k], "--only") == 0 && k + 1 < argc) {
       only = argv[++k];
+    } else if (std::strcmp(argv[k], "--launches") == 0) {
+      launches = int(number(k, 1));
+      ok = launches >= 1;
+    } else if (std::strcmp(argv[k], "--sliding-skin") == 0) {
+      base_options.sliding_skin = number(k, 1e-9);
+      ok = base_options.sliding_skin > 0;
+    } else if (std::strcmp(argv[k], "--sliding-refresh") == 0) {
+      base_options.sliding_refresh_interval = int(number(k, 1));
+      ok = base_options.sliding_refresh_interval >= 1;
     } else {
-      std::printf("usage: cuda_bench [--quick] [--only NAME] [--profile]\n");
+      ok = false;
+    }
+    if (!ok) {
+      std::printf(
+          "usage: cuda_bench [--quick] [--only NAME] [--profile] [--launches N] "
+          "[--sliding-skin CELLS] [--sliding-refresh STEPS]\n");
       return 2;
     }
   }
-  const int launches = profile ? 3 : quick ? 5 : 20;
+  if (launches == 0) launches = profile ? 3 : quick ? 5 : 20;
+  print_each_launch = profile;
   if (!cuda_device_available()) {
     std::printf("no CUDA device: nothing to measure\n");
     return 0;
@@ -153,7 +187,7 @@ int main(int argc, char** argv) {
     // What the default (automatic) assembly resolves to on this model: the base of the shares.
     ForceAssembly chosen = kDefault;
     try {
-      auto b = make_cuda_backend(c.model, c.setup);
+      auto b = make_cuda_backend(c.model, c.setup, base_options);
       chosen = dynamic_cast<CudaTiming*>(b.get())->assembly();
     } catch (const std::exception& ex) {
       std::printf("  (failed: %s)\n", ex.what());
@@ -194,7 +228,7 @@ int main(int argc, char** argv) {
     // Float ms per step with one CUDA option changed (label: what was changed).
     auto with_option = [&](const std::string& label, ForceAssembly a,
                            const std::function<void(CudaOptions&)>& set) {
-      CudaOptions o;
+      CudaOptions o = base_options;
       set(o);
       Setup s = c.setup;
       s.precision = Precision::float32;
@@ -234,7 +268,7 @@ int main(int argc, char** argv) {
     try {
       Setup s = c.setup;
       s.precision = Precision::float32;
-      auto b = make_cuda_backend(c.model, s);
+      auto b = make_cuda_backend(c.model, s, base_options);
       auto* t = dynamic_cast<CudaTiming*>(b.get());
       const auto stages = t->stage_times(quick ? 5 : 30);
       double sum = 0;

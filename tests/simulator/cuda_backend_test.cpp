@@ -205,21 +205,30 @@ TEST(CudaBackend, ProgrammaticLaunchesGiveThePlainLaunchesResults) {
     }
 }
 
-// The sliding candidate lists are exact for any skin: a skin so small that nodes leave their lists
-// every step (misses, batch replays, then inline refresh), the default, 0.35 cells (longer lists,
-// read before the wait of a programmatic launch), and a skin so large that lists overflow (full
+// The sliding candidate lists are exact for any skin and refresh interval: a skin so small that
+// nodes leave their lists every step (misses, batch replays, the refresh interval halved; from 2
+// steps on, down to inline refreshes), the default, 0.35 cells (longer lists, read before the wait
+// of a programmatic launch), refreshes every step, and a skin so large that lists overflow (full
 // searches) give the same bits, with gather and with tiled assembly (lists refreshed beside the
 // step, the constraint kernel after it).
 TEST(CudaBackend, SlidingListsGiveTheSameResultsForAnySkin) {
   SKIP_WITHOUT_GPU();
   const Scene s = muscle_sliding_scene(Precision::float32);
+  const int every = CudaOptions{}.sliding_refresh_interval;
+  const std::pair<double, int> cases[] = {{CudaOptions{}.sliding_skin, every},
+                                          {0.35, every},
+                                          {CudaOptions{}.sliding_skin, 1},
+                                          {1e-6, every},
+                                          {1e-6, 2},
+                                          {3.0, every}};
   for (ForceAssembly assembly : {ForceAssembly::gather, ForceAssembly::tiled}) {
     std::vector<double> first;
     std::vector<std::int32_t> first_triangles;
-    for (double skin : {CudaOptions{}.sliding_skin, 0.35, 1e-6, 3.0}) {
+    for (const auto& [skin, refresh] : cases) {
       CudaOptions o;
       o.assembly = assembly;
       o.sliding_skin = skin;
+      o.sliding_refresh_interval = refresh;
       auto gpu = make_cuda_backend(s.model, s.setup, o);
       gpu->step(600);
       const auto u = gpu->displacements();
@@ -231,8 +240,8 @@ TEST(CudaBackend, SlidingListsGiveTheSameResultsForAnySkin) {
       }
       const char* name = assembly == ForceAssembly::gather ? "gather" : "tiled";
       EXPECT_EQ(0, std::memcmp(first.data(), u.data(), u.size() * sizeof(double)))
-          << name << ", skin " << skin;
-      EXPECT_EQ(first_triangles, tri) << name << ", skin " << skin;
+          << name << ", skin " << skin << ", refresh every " << refresh;
+      EXPECT_EQ(first_triangles, tri) << name << ", skin " << skin << ", refresh every " << refresh;
     }
   }
 }

@@ -1,14 +1,17 @@
-// The sliding nodes' candidate-list query (sliding_grid.hpp) against the full grid search it stands
-// in for: the same closest triangle and the same closest point, bit for bit, in float and double,
-// for nodes anywhere within the skin of their list's anchor, with ties (nodes above the vertices
-// and edges of a flat patch) and with the distance cull of closest_listed_point doing its work.
+// The sliding nodes' candidate lists (sliding_grid.hpp) against every triangle, and the listed
+// query against the full grid search it stands in for: the same closest triangle and the same
+// closest point, bit for bit, in float and double, for nodes anywhere within the skin of their
+// list's anchor, with ties (nodes above the vertices and edges of a flat patch) and with the
+// distance cull of closest_listed_point doing its work.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "sinew/simulator/sliding_grid.hpp"
@@ -76,7 +79,7 @@ void expect_listed_query_is_exact(const char* name) {
   constexpr std::int32_t kCapacity = 64;
   std::int32_t list[kCapacity];
   T distance[kCapacity];
-  long queries = 0, entries = 0, culled = 0, ties = 0;
+  long queries = 0, entries = 0, culled = 0, ties = 0, brute_checked = 0, small_overflows = 0;
   for (double skin_cells : {0.05, 0.25, 0.5}) {
     const T skin = T(skin_cells * grid.cell);
     for (int trial = 0; trial < 3000; ++trial) {
@@ -94,10 +97,56 @@ void expect_listed_query_is_exact(const char* name) {
       std::int32_t t_anchor = -1;
       const Vec3<T> p_anchor = closest_surface_search<T, true>(view, anchor, t_anchor);
       const T d1 = std::sqrt(squared_norm(anchor - p_anchor));
+      // The list in one walk, warm-started from the closest triangle, from a random one (a
+      // radius that shrinks as the walk goes), or from none (triangle 0: a walk over most of the
+      // sheet, the list filled and dropping entries).
+      const std::int32_t n_triangles = std::int32_t(sheet.triangles.size());
+      std::int32_t t_list = trial % 5 == 0   ? -1
+                            : trial % 5 == 1 ? std::int32_t(unit(rng) * n_triangles) % n_triangles
+                                             : t_anchor;
       const std::int32_t count =
-          collect_surface_candidates(view, anchor, d1 + T(2) * skin, list, distance, 1, kCapacity);
+          list_surface_candidates<kCapacity>(view, anchor, skin, t_list, list, distance, 1);
+      // Against every triangle: the list holds each one within d1 + 2 s (up to round-off at the
+      // rim), with its distance, and none beyond; a list of capacity 4 either holds the same
+      // first entries or reports an overflow when more than 4 lie within d1 + 2 s.
+      if (trial % 3 == 0) {
+        const T radius = d1 + T(2) * skin;
+        std::vector<std::pair<T, std::int32_t>> within;
+        bool rim = false;  // a triangle within round-off of the rim
+        for (std::int32_t t = 0; t < n_triangles; ++t) {
+          const Vec3<T>* c = &corners[3 * std::size_t(t)];
+          const T d = std::sqrt(
+              squared_norm(anchor - physics::closest_point_on_triangle(anchor, c[0], c[1], c[2])));
+          if (d <= radius) within.push_back({d, t});
+          rim = rim || std::abs(d - radius) <= T(1e-5) * radius;
+        }
+        std::sort(within.begin(), within.end());
+        if (count >= 0 && !rim) {
+          ASSERT_EQ(std::size_t(count), within.size()) << name << ", trial " << trial;
+          for (std::int32_t n = 0; n < count; ++n) {
+            ASSERT_EQ(list[n], within[std::size_t(n)].second) << name << ", trial " << trial;
+            ASSERT_EQ(distance[n], within[std::size_t(n)].first) << name << ", trial " << trial;
+          }
+        }
+        std::int32_t small_list[4];
+        T small_distance[4];
+        std::int32_t t_small = t_list;
+        const std::int32_t small =
+            list_surface_candidates<4>(view, anchor, skin, t_small, small_list, small_distance, 1);
+        if (!rim) {
+          const bool overflowed = small < 0;
+          const bool over_four = within.size() > 4;
+          ASSERT_EQ(overflowed, over_four) << name << ", trial " << trial;
+          for (std::int32_t n = 0; n < small; ++n)
+            ASSERT_EQ(small_list[n], within[std::size_t(n)].second) << name << ", trial " << trial;
+        }
+        ++brute_checked;
+        small_overflows += small < 0 ? 1 : 0;
+      }
       if (count < 0) continue;  // overflow: such a node searches the grid instead
       ASSERT_GT(count, 0) << name;
+      // The walk's closest triangle: at the search's distance (the same bits).
+      ASSERT_EQ(distance[0], d1) << name << ", trial " << trial;
       for (std::int32_t n = 1; n < count; ++n) ASSERT_LE(distance[n - 1], distance[n]) << name;
       // The node: within 0.999 s of the anchor (none moved in a quarter of the trials: ties stay
       // exact ties), its warm start the anchor's closest triangle or any listed one.
@@ -143,7 +192,13 @@ void expect_listed_query_is_exact(const char* name) {
       "%.0f%% of them culled; %ld queries with an exact tie kept by the warm start\n",
       name, queries, double(entries) / double(queries), 100.0 * double(culled) / double(entries),
       ties);
+  std::printf(
+      "[ measured ] %s: %ld lists checked against every triangle, %ld of them over 4 "
+      "entries\n",
+      name, brute_checked, small_overflows);
   EXPECT_GT(culled, entries / 4) << name << ": the cull must skip entries";
+  EXPECT_GT(small_overflows, brute_checked / 10) << name << ": lists of 4 must overflow";
+  EXPECT_LT(small_overflows, brute_checked) << name << ": lists of 4 must not always overflow";
   EXPECT_GT(ties, 100) << name << ": the trials must contain exact ties";
 }
 

@@ -327,7 +327,7 @@ constexpr int kCandidates = 32;
 // start of the tie rule, as the CPU's), the warm start of the grid searches (written by list
 // refreshes only, so a refresh running beside a step never touches what the step reads), and its
 // candidate list: count (−1: none, search fully), anchor x_s, ids at list[j · count + k] and their
-// distances from x_s at list_distance[j · count + k] (sorted: collect_surface_candidates).
+// distances from x_s at list_distance[j · count + k] (sorted: list_surface_candidates).
 template <typename T>
 struct SlideData {
   const std::int32_t* node;
@@ -345,24 +345,22 @@ struct SlideData {
 };
 
 // Sliding node k at position x: while x is within s (1 − 1e-3) of the anchor of its list, the
-// list holds its closest triangle (sliding_grid.hpp) and nothing is done; otherwise the full grid
-// search finds the closest triangle (into search_triangle[k]), re-lists the triangles within
-// d1 + 2 s and moves the anchor to x (list count −1 when more than kCandidates: the triangle found
-// is used). `reach` (≤ 1): the fraction of s within which the anchor is kept (½ when refreshing ahead
-// of the step, from u(n), so that u(n+1) still lies within s of the anchor).
+// list holds its closest triangle (sliding_grid.hpp) and nothing is done; otherwise one grid walk
+// (list_surface_candidates, warm-started from search_triangle[k], where it leaves the closest
+// triangle) re-lists the triangles within d1 + 2 s and moves the anchor to x (list count −1 when
+// more than kCandidates: the node then searches fully). `reach` (≤ 1): the fraction of s within
+// which the anchor is kept (½ when refreshing ahead of the step, from u(n), so that u(n+1) still
+// lies within s of the anchor).
 template <typename T>
 __device__ __forceinline__ void refresh_slide_list(const SlideData<T>& d, std::int32_t k,
                                                    const Vec3<T>& x, T reach) {
   const SlideSurface<T>& sf = d.surfaces[d.surface[k]];
-  const T skin = sf.skin;
-  const T move = skin * T(0.999) * reach;
+  const T move = sf.skin * T(0.999) * reach;
   if (d.list_count[k] > 0 && squared_norm(x - d.anchor[k]) <= move * move) return;
   std::int32_t t = d.search_triangle[k];
-  const Vec3<T> p = closest_surface_search<T, true>(sf.view, x, t);
+  d.list_count[k] = list_surface_candidates<kCandidates>(sf.view, x, sf.skin, t, d.list + k,
+                                                         d.list_distance + k, d.count);
   d.search_triangle[k] = t;
-  const T d1 = std::sqrt(squared_norm(x - p));
-  d.list_count[k] = collect_surface_candidates(sf.view, x, d1 + T(2) * skin, d.list + k,
-                                               d.list_distance + k, d.count, kCandidates);
   d.anchor[k] = x;
 }
 
@@ -583,7 +581,7 @@ __global__ void __launch_bounds__(kBlock, kSlide == 2 ? 4 : 1)
 
 // Ahead of a step, concurrently with its element and node kernels (a parallel branch of the
 // graph): one thread per sliding entry k refreshes its list at its position of u(n), keeping the
-// anchor while within s/2 of it, so the grid searches leave the step's critical path and
+// anchor while within s/2 of it, so the grid walks leave the step's critical path and
 // constraint_kernel<T, 2> carries no search code. A node that then moves more than s/2 in the step
 // raises slide_miss there (exactness is kept by a replay).
 template <typename T>
@@ -1080,7 +1078,8 @@ class CudaEngine final : public Backend, public CudaTiming {
   // Sliding lists refreshed ahead of each graph step (slide_refresh_kernel on slide_stream_);
   // false after repeated misses, and in direct steps (inline refresh): docs/cuda-backend.md.
   bool slide_ahead_ = true;
-  int slide_miss_batches_ = 0;
+  int slide_miss_batches_ = 0;  // graph batches with a miss at the current refresh interval
+  int refresh_interval_ = 1;    // steps between list refreshes (options, halved on misses)
   cudaStream_t slide_stream_ = nullptr;
   cudaEvent_t slide_fork_ = nullptr, slide_done_ = nullptr;
   DeviceArray<std::int32_t> node_op_offset_;  // N + 1 into con_op_ (program_in_node_)
@@ -1164,6 +1163,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   if (options.sliding_refresh_interval < 1)
     throw ConfigError("", "sliding_refresh_interval",
                       format("must be at least 1 step, got %d", options.sliding_refresh_interval));
+  refresh_interval_ = options.sliding_refresh_interval;
   if (options.tiles_per_sm < 1)
     throw ConfigError("", "tiles_per_sm",
                       format("must be at least 1, got %d", options.tiles_per_sm));
@@ -1583,9 +1583,9 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
   };
   mark("start");
   const bool ahead = ahead_slide && slide_node_.size();
-  // Lists refreshed every sliding_refresh_interval steps (a batch starts with one); in between a
-  // node keeps its list while within s of its anchor (else a miss and a replay).
-  const bool refresh = ahead && step % options_.sliding_refresh_interval == 0;
+  // Lists refreshed every refresh_interval_ steps (a batch starts with one); in between a node
+  // keeps its list while within s of its anchor (else a miss and a replay).
+  const bool refresh = ahead && step % refresh_interval_ == 0;
   const T* sc = scalars_.get() + scalars_per_slot_ * std::size_t(slot);
   if (refresh) {  // fork: the lists for this step, from u(n), beside the element and node kernels
     SINEW_CUDA_CHECK(cudaEventRecord(slide_fork_, s));
@@ -1908,9 +1908,14 @@ void CudaEngine<T>::step(std::int64_t n) {
     const Status st = *status_host_.get();
     if (st.slide_miss && !(st.bad_jacobian || st.bad_displacement || st.blowup) &&
         ++slide_miss_batches_ >= 2) {
-      // Nodes outrun the lists refreshed ahead (more than s/2 per step): from now on the graph
-      // refreshes inline (grid searches on the step's path again; same results).
-      slide_ahead_ = false;
+      // Nodes outrun the lists refreshed ahead: from now on the graph refreshes them twice as
+      // often, and once every step did not suffice (nodes moving more than s/2 per step), inline
+      // (grid searches on the step's path again). Same results either way.
+      if (refresh_interval_ > 1)
+        refresh_interval_ /= 2;
+      else
+        slide_ahead_ = false;
+      slide_miss_batches_ = 0;
       cudaGraphExecDestroy(graph_);
       graph_ = nullptr;
       build_graph();

@@ -39,9 +39,11 @@ struct CudaOptions {
   // rarer searches (docs/cuda-backend.md, Sliding; docs/performance.md has the sweep).
   double sliding_skin = 0.05;
   // Steps between refreshes of the candidate lists in graph steps (each refresh keeps a node's list
-  // while it is within s/2 of its anchor). Exact for any value: a node that moves more than s/2
-  // before the next refresh misses its list and the batch is replayed with inline refreshes.
-  int sliding_refresh_interval = 4;
+  // while it is within s/2 of its anchor), at the start of a run. Exact for any value: a node that
+  // moves more than s/2 before the next refresh misses its list and the batch is replayed with
+  // inline refreshes; after two such batches the interval is halved, and once refreshing every
+  // step misses in two batches too, the graph refreshes inline.
+  int sliding_refresh_interval = 16;
   // Tiled assembly: tiles wanted per SM. The node lattice is cut into columns of 15 × 15 nodes, and
   // those into z chunks only as far as needed for this many tiles (lattice_tiles.hpp): more, shorter
   // tiles fill the GPU better but compute more rim elements twice.

@@ -272,9 +272,9 @@ SINEW_HD_INLINE Vec3<T> closest_surface_point(const SurfaceView<T>& s, const Vec
   return closest_surface_search<T, false>(s, x, triangle);
 }
 
-// Candidate lists (Verlet lists with a skin, exact): after a full search at the anchor x_s with
-// closest distance d1, list every triangle within d1 + 2 s of x_s. While the node stays within s
-// of x_s, its closest triangle is in the list: for |x − x_s| ≤ s, the closest triangle T* at x has
+// Candidate lists (Verlet lists with a skin, exact): at the anchor x_s, with closest distance d1,
+// list every triangle within d1 + 2 s of x_s (list_surface_candidates). While the node stays
+// within s of x_s, its closest triangle is in the list: for |x − x_s| ≤ s, the closest triangle T* at x has
 // dist(x, T*) ≤ dist(x, T1) ≤ d1 + s, so dist(x_s, T*) ≤ d1 + 2 s. Only the listed triangles are
 // then tested, with the lowest-id tie rule of closest_surface_search<T, true> (warm start first),
 // so both paths return the same triangle. The move test uses s (1 − 1e-3): the margin covers float
@@ -296,41 +296,88 @@ std::vector<Vec3<T>> triangle_corner_list(
   return c;
 }
 
-// Every triangle within `radius` of x into list[j · stride] with its distance from x in
-// distance[j · stride], j < capacity, each once, sorted by (distance, id); returns their count, or
-// −1 when more than `capacity` (no list: the node searches fully).
-template <typename T>
-SINEW_HD_INLINE std::int32_t collect_surface_candidates(const SurfaceView<T>& s, const Vec3<T>& x,
-                                                        T radius, std::int32_t* list, T* distance,
-                                                        std::int64_t stride,
-                                                        std::int32_t capacity) {
-  const T r2 = radius * radius;
+// The candidate list of x in one grid walk: every triangle within d1 + 2 s of x (d1: the distance
+// from x to the surface, s: skin) into list[j · stride] with its distance from x in
+// distance[j · stride], j < kCapacity, each once, sorted by (distance, id); returns their count, or
+// −1 when more than kCapacity lie within d1 + 2 s (no list: the node searches fully). `triangle`
+// in: a warm start (any id; invalid: triangle 0), out: the closest triangle (lowest id among equal
+// distances; also on overflow).
+//
+// The walk's radius starts at d_w + 2 s (d_w: the warm start's distance, ≥ d1) and shrinks to
+// d_b + 2 s as closer triangles are found (d_b: the closest so far), so one walk both finds d1 and
+// lists, where a search within d_w and then a walk within d1 + 2 s would visit the near cells
+// twice. Entries listed while the radius was larger are dropped at the end (d > d1 + 2 s). A full
+// list keeps its kCapacity closest entries and remembers the closest it dropped: the list
+// overflowed only if that one lies within the final d1 + 2 s. The list is built in the caller's
+// own (thread-local) arrays and written out once: on the GPU its insertions then stay in L1
+// instead of waiting on the strided global list entry by entry.
+template <int kCapacity, typename T>
+SINEW_HD_INLINE std::int32_t list_surface_candidates(const SurfaceView<T>& s, const Vec3<T>& x,
+                                                     T skin, std::int32_t& triangle,
+                                                     std::int32_t* list, T* distance,
+                                                     std::int64_t stride) {
+  const std::int32_t warm = triangle >= 0 && triangle < s.triangle_count ? triangle : 0;
+  Vec3<T> p;
+  T radius = std::sqrt(triangle_distance2(s, warm, x, p)) + T(2) * skin;
+  T r2 = radius * radius;
   std::int32_t lo[3], hi[3];
   cells_within(s, x, radius, lo, hi);
+  // The list being built, entries [0, count) set. (Read through pointers: nvcc's used-before-set
+  // check does not see that the full-list branch runs only once count = kCapacity.)
+  std::int32_t id_store[kCapacity];
+  T distance_store[kCapacity];
+  std::int32_t* const ids = id_store;
+  T* const ds = distance_store;
   std::int32_t count = 0;
-  const bool complete =
-      visit_near_entries(s, x, lo, hi, r2, [&](std::int32_t t, const Vec3<T>(&v)[3]) {
-        const Vec3<T> p = physics::closest_point_on_triangle(x, v[0], v[1], v[2]);
-        const T d2 = squared_norm(x - p);
-        if (d2 > r2) return true;
-        for (std::int32_t n = 0; n < count; ++n)
-          if (list[n * stride] == t) return true;
-        if (count == capacity) return false;
-        // Insertion into the sorted list (lists hold a few entries).
-        const T d = std::sqrt(d2);
-        std::int32_t n = count++;
-        for (; n > 0; --n) {
-          const T dn = distance[(n - 1) * stride];
-          const std::int32_t tn = list[(n - 1) * stride];
-          if (dn < d || (dn == d && tn < t)) break;
-          list[n * stride] = tn;
-          distance[n * stride] = dn;
-        }
-        list[n * stride] = t;
-        distance[n * stride] = d;
+  bool dropped = false;
+  T dropped_distance = T(0);  // the closest dropped entry's distance (when `dropped`)
+  auto drop = [&](T d) {
+    dropped_distance = dropped && dropped_distance < d ? dropped_distance : d;
+    dropped = true;
+  };
+  visit_near_entries(s, x, lo, hi, r2, [&](std::int32_t t, const Vec3<T>(&v)[3]) {
+    const Vec3<T> q = physics::closest_point_on_triangle(x, v[0], v[1], v[2]);
+    const T d2 = squared_norm(x - q);
+    if (d2 > r2) return true;
+    for (std::int32_t n = 0; n < count; ++n)
+      if (ids[n] == t) return true;
+    const T d = std::sqrt(d2);
+    if (count == kCapacity) {  // full: the farther of this entry and the last one goes
+      const T last = ds[kCapacity - 1];
+      if (d > last || (d == last && t > ids[kCapacity - 1])) {
+        drop(d);
         return true;
-      });
-  return complete ? count : -1;
+      }
+      drop(last);
+      --count;
+    }
+    // Insertion into the sorted list (lists hold a few entries).
+    std::int32_t n = count++;
+    for (; n > 0; --n) {
+      if (ds[n - 1] < d || (ds[n - 1] == d && ids[n - 1] < t)) break;
+      ids[n] = ids[n - 1];
+      ds[n] = ds[n - 1];
+    }
+    ids[n] = t;
+    ds[n] = d;
+    if (n == 0) {  // a new closest: the radius shrinks to d + 2 s
+      radius = d + T(2) * skin;
+      r2 = radius * radius;
+    }
+    return true;
+  });
+  // The warm start lies within the first radius, so the list holds at least one entry, the first
+  // the closest triangle (never dropped: a full list drops its farthest). Empty only for a NaN x
+  // (cells_within: no cells): no list.
+  if (count == 0) return 0;
+  triangle = ids[0];
+  while (count > 0 && ds[count - 1] > radius) --count;
+  if (dropped && dropped_distance <= radius) return -1;
+  for (std::int32_t n = 0; n < count; ++n) {
+    list[n * stride] = ids[n];
+    distance[n * stride] = ds[n];
+  }
+  return count;
 }
 
 // Entries m0, m0 + 1 of a list (list[j · stride], distance[j · stride]; id −1 from `count` on):
@@ -355,7 +402,7 @@ SINEW_HD_INLINE ListedGroup<T> load_listed_group(const std::int32_t* list, const
   return g;
 }
 
-// Closest point to x of the listed triangles (count ≥ 1, sorted as collect_surface_candidates
+// Closest point to x of the listed triangles (count ≥ 1, sorted as list_surface_candidates
 // leaves them) and the warm start, with the rule of closest_surface_search<T, true>: strictly
 // closer wins; on equal distance the warm start, then the lowest id. `triangle` in: the warm start
 // (a valid triangle id; warm: its corners), out: the closest triangle. corners:
