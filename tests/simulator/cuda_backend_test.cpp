@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -152,6 +153,17 @@ std::vector<std::pair<std::string, Scene>> assembly_scenes() {
   return scenes;
 }
 
+// Scene s run `steps` steps on the CUDA backend with options a and with options b.
+struct BackendPair {
+  std::unique_ptr<Backend> a, b;
+};
+BackendPair run_both(const Scene& s, const CudaOptions& a, const CudaOptions& b, int steps) {
+  BackendPair r{make_cuda_backend(s.model, s.setup, a), make_cuda_backend(s.model, s.setup, b)};
+  r.a->step(steps);
+  r.b->step(steps);
+  return r;
+}
+
 // Tiled assembly sums the same element entries in the same order as gather (lattice_tiles.hpp): on
 // the assembly scenes it gives gather's results; the figure printed says whether they are
 // bit-identical.
@@ -161,10 +173,7 @@ TEST(CudaBackend, TiledAssemblyGivesGathersResults) {
     CudaOptions gather, tiled;
     gather.assembly = ForceAssembly::gather;
     tiled.assembly = ForceAssembly::tiled;
-    auto a = make_cuda_backend(s.model, s.setup, gather);
-    auto b = make_cuda_backend(s.model, s.setup, tiled);
-    a->step(700);
-    b->step(700);
+    const auto [a, b] = run_both(s, gather, tiled, 700);
     const auto ua = a->displacements(), ub = b->displacements();
     ASSERT_GT(max_abs(ua), 1e-9) << name << ": the scene must move";
     const double measure = max_diff(ua, ub) / max_abs(ua);
@@ -191,10 +200,7 @@ TEST(CudaBackend, ProgrammaticLaunchesGiveThePlainLaunchesResults) {
       plain.assembly = programmatic.assembly = assembly;
       plain.programmatic_launch = false;
       programmatic.programmatic_launch = true;
-      auto a = make_cuda_backend(s.model, s.setup, plain);
-      auto b = make_cuda_backend(s.model, s.setup, programmatic);
-      a->step(700);
-      b->step(700);
+      const auto [a, b] = run_both(s, plain, programmatic, 700);
       const auto ua = a->displacements(), ub = b->displacements();
       ASSERT_GT(max_abs(ua), 1e-9) << name << ": the scene must move";
       const char* how = assembly == ForceAssembly::gather ? "gather" : "tiled";
