@@ -11,6 +11,7 @@
 
 #include "sinew/formats/model.hpp"
 #include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/passes/sliding_lists.hpp"
 #include "sinew/simulator/setup.hpp"
 
 namespace sinew::simulator {
@@ -37,7 +38,7 @@ struct CudaOptions {
   // a node tests only its listed triangles (those within d1 + 2 s of where it last searched) until
   // it moves more than s, then searches the grid again. Exact for any s > 0; larger: longer lists,
   // rarer searches (docs/cuda-backend.md, Sliding; docs/performance.md has the sweep).
-  double sliding_skin = 0.05;
+  double sliding_skin = kDefaultSlidingSkin;
   // Steps between refreshes of the candidate lists in graph steps (each refresh keeps a node's list
   // while it is within s/2 of its anchor), at the start of a run. Exact for any value: a node that
   // moves more than s/2 before the next refresh misses its list and the batch is replayed with
@@ -84,5 +85,17 @@ class CudaTiming {
 // Device-to-device copy bandwidth (bytes read + bytes written per second) over `bytes` bytes,
 // median of `repeats` timed copies. Throws when built without CUDA.
 double measure_copy_bandwidth(std::size_t bytes, int repeats = 20);
+
+namespace detail {
+// Between cuda_backend.cpp (checks, messages) and cuda/cuda_device.cu (the runtime).
+std::unique_ptr<Backend> make_cuda_engine(const formats::Model& model, const Setup& setup,
+                                          Plan plan, const CudaOptions& options);
+struct CudaDeviceProperties {
+  std::string name;
+  int major = 0, minor = 0, sms = 0;
+  double bytes = 0;  // global memory
+};
+bool cuda_device_properties(CudaDeviceProperties& out);  // false without a device
+}  // namespace detail
 
 }  // namespace sinew::simulator

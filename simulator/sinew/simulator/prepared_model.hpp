@@ -1,7 +1,8 @@
 #pragma once
 // Host-side preparation shared by the backends: everything derived once from (Model, Setup, Plan)
-// before a run, in double; each backend converts to its scalar T with T(x) so both start from
-// bit-identical inputs. Arrays are flat (CSR where ragged) so they copy to a device as they are.
+// before a run, in double, as named structs; make_engine_arrays (backend_core.hpp) converts it to
+// the run's scalar T with T(x) once for both engines, so both start from bit-identical inputs.
+// Arrays are flat (CSR where ragged) so they copy to a device as they are.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -9,6 +10,7 @@
 
 #include "sinew/formats/model.hpp"
 #include "sinew/simulator/curve.hpp"
+#include "sinew/simulator/physics/element.hpp"
 #include "sinew/simulator/plan.hpp"
 #include "sinew/simulator/setup.hpp"
 #include "sinew/simulator/sliding_grid.hpp"
@@ -33,10 +35,10 @@ struct PreparedModel {
   double h = 0;                                     // m
   std::vector<std::array<Index, 8>> element_nodes;  // E × 8
   std::vector<std::int32_t> row;                    // E, parameter row of each element
-  std::vector<std::array<double, 3>> rows;  // (μ, κ, k_HG) per row; μ = κ = 0 without elasticity
-  std::vector<std::array<double, 3>> rest;     // N, m
-  std::vector<Index> dominant_material;        // E
-  std::vector<double> mass;                    // N, kg (mass-scaled)
+  std::vector<physics::ElementRow<double>> rows;    // per row; μ = κ = 0 without elasticity
+  std::vector<std::array<double, 3>> rest;          // N, m
+  std::vector<Index> dominant_material;             // E
+  std::vector<double> mass;                         // N, kg (mass-scaled)
   std::vector<std::array<double, 3>> gravity;  // N, the physical weight (empty without gravity)
   double volume = 0, min_modulus = 1;          // for the energy floor ε · volume · min_modulus
   // Node -> (element, corner) incidence, ascending element order: the fixed gather order.
@@ -46,9 +48,9 @@ struct PreparedModel {
   std::vector<std::int64_t> muscle_offset;  // E + 1
   std::vector<std::int32_t> muscle_id;
   std::vector<double> muscle_fraction;
-  std::vector<std::array<double, 3>> muscle_fibre;   // unit
-  std::vector<std::array<double, 5>> muscle_params;  // σref, λopt, p1, p2, x* per model muscle
-  double active_energy_bound = 0;                    // J
+  std::vector<std::array<double, 3>> muscle_fibre;           // unit
+  std::vector<physics::MuscleParams<double>> muscle_params;  // per model muscle
+  double active_energy_bound = 0;                            // J
   // Loads (empty unless effects.loads), planes, rigid nodes.
   std::vector<PreparedLoadSet> forces, prescribed;
   std::vector<Index> plane_nodes;

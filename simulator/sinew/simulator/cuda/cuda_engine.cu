@@ -1,0 +1,243 @@
+// The CUDA engine's set-up: the shared EngineArrays uploaded once, streams and events, the choice
+// of assembly, the initial state and the first graph capture.
+#include "sinew/simulator/cuda/cuda_engine.cuh"
+
+#include <algorithm>
+#include <limits>
+#include <numeric>
+
+namespace sinew::simulator::cuda {
+
+template <typename T>
+CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan plan,
+                          const CudaOptions& options)
+    : core_(model, setup, std::move(plan)), options_(options) {
+  // The options were checked by make_cuda_backend (cuda_backend.cpp).
+  refresh_interval_ = options.sliding_refresh_interval;
+  SINEW_CUDA_CHECK(cudaSetDevice(options.device));
+  arrays_ = make_engine_arrays<T>(core_.prepared(), options.sliding_skin);
+  const EngineArrays<T>& a = arrays_;
+  h_ = a.h;
+  n_ = a.nodes;
+  e_ = a.elements;
+  interval_ = std::max(1, setup.energy_interval);
+  {
+    // Graph batches start at steps ≡ 0 mod lcm(3, interval) so the blow-up tests sit at fixed
+    // slots of the captured graph; a very long interval falls back to a test at each sync point.
+    const std::int64_t lcm = std::lcm<std::int64_t>(3, interval_);
+    graph_blowup_ = lcm <= 1024;
+    align_ = graph_blowup_ ? lcm : 3;
+    const std::int64_t want = std::max<std::int64_t>(options.graph_steps, align_);
+    batch_ = int((want + align_ - 1) / align_ * align_);
+  }
+  const Effects& fx = setup.effects;
+  cd_ = physics::central_difference<T>(dt(), fx.damping ? setup.damping_alpha : 0.0);
+
+  SINEW_CUDA_CHECK(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
+  SINEW_CUDA_CHECK(cudaStreamCreateWithFlags(&copy_stream_, cudaStreamNonBlocking));
+  SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&copy_ready_, cudaEventDisableTiming));
+
+  elem_nodes_.upload(a.element_nodes);
+  row_.upload(a.row);
+  rows_.upload(a.rows);
+  for (const auto& c : core_.plan().collections) {
+    DeviceCollection dc;
+    dc.muscle = c.muscle;
+    dc.elements.upload(c.elements);
+    collections_.push_back(std::move(dc));
+  }
+  SINEW_CUDA_CHECK(
+      cudaDeviceGetAttribute(&sm_count_, cudaDevAttrMultiProcessorCount, options.device));
+  {
+    int major = 0;
+    SINEW_CUDA_CHECK(
+        cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, options.device));
+    programmatic_ = options.programmatic_launch && major >= 9;
+  }
+  SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&fork_, cudaEventDisableTiming));
+  SINEW_CUDA_CHECK(cudaStreamCreateWithFlags(&slide_stream_, cudaStreamNonBlocking));
+  SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&slide_fork_, cudaEventDisableTiming));
+  SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&slide_done_, cudaEventDisableTiming));
+  for (std::size_t c = 1; c < collections_.size(); ++c) {
+    side_streams_.emplace_back();
+    SINEW_CUDA_CHECK(cudaStreamCreateWithFlags(&side_streams_.back(), cudaStreamNonBlocking));
+    side_done_.emplace_back();
+    SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&side_done_.back(), cudaEventDisableTiming));
+  }
+  if (fx.muscles) {
+    muscle_offset_.upload(a.muscle_offset);
+    muscle_id_.upload(a.muscle_id);
+    muscle_fraction_.upload(a.muscle_fraction);
+    muscle_fibre_.upload(a.muscle_fibre);
+    muscle_params_.upload(a.muscle_params);
+    muscles_ = a.muscle_params.size();
+  }
+  if (options.assembly == ForceAssembly::tiled || options.assembly == ForceAssembly::automatic) {
+    // automatic: tiles too many to pay off are not built (max_paying_slots).
+    const LatticeTiles tiles = make_lattice_tiles(
+        model.node_lattice, model.element_lattice,
+        std::size_t(options.tiles_per_sm) * std::size_t(sm_count_),
+        options.assembly == ForceAssembly::automatic ? max_paying_slots(e_) : SIZE_MAX);
+    if (options.assembly == ForceAssembly::automatic)
+      options_.assembly = tiles_pay_off(tiles, e_) ? ForceAssembly::tiled : ForceAssembly::gather;
+    if (options_.assembly == ForceAssembly::tiled) {
+      tile_layers_.upload(tiles.tile_layers);
+      tile_window_.upload(tiles.window_node);
+      tile_slot_.upload(tiles.slot_element);
+      tile_data_ = {tile_layers_.get(), tile_window_.get(), tile_slot_.get(),
+                    std::int64_t(tiles.window_stride()), std::int64_t(tiles.slot_stride())};
+    }
+  }
+  if (options_.assembly == ForceAssembly::gather) {
+    elem_force_.allocate(e_ * 8);
+  } else if (options_.assembly == ForceAssembly::atomic) {
+    f_sum_.allocate(n_);
+    f_sum_.zero();
+  }
+  inc_offset_.upload(a.incidence_offset);
+  {
+    // The gather reads the corner-major buffer: entry e · 8 + a of the incidence becomes a · E + e
+    // (same entries, same order: the summation order is the CPU's).
+    std::vector<std::int32_t> inc(a.incidence.size());
+    for (std::size_t k = 0; k < inc.size(); ++k) {
+      const auto v = std::size_t(a.incidence[k]);
+      inc[k] = std::int32_t((v % 8) * e_ + v / 8);
+    }
+    inc_.upload(inc);
+  }
+  f_.allocate(n_);
+  inverse_mass_.upload(a.inverse_mass);
+  rest_.upload(a.rest);
+  if (fx.gravity) gravity_.upload(a.gravity);
+  for (auto& b : buf_) b.allocate(n_);
+  snap_u_.allocate(n_);
+  snap_up_.allocate(n_);
+
+  // Loads and constraints: the constraint program of the core (per node its ops in the one order).
+  const ConstraintArrays<T>& program = a.constraints;
+  node_op_offset_.upload(program.node_op_offset);
+  con_node_.upload(program.node);
+  con_offset_.upload(program.offset);
+  con_op_.upload(program.op);
+  force_per_node_.upload(program.force_per_node);
+  prescribed_value_.upload(program.prescribed_value);
+  prescribed_mask_.upload(program.prescribed_mask);
+  prescribed_set_.upload(program.prescribed_set);
+  prescribed_free_.allocate(program.prescribed_set.size());
+  plane_normals_.upload(program.plane_normal);
+  if (!a.surfaces.empty()) {
+    std::vector<SlideSurface<T>> views;
+    for (const auto& s : a.surfaces) {
+      auto ds = std::make_unique<DeviceSurface<T>>();
+      ds->vertices.upload(s.vertices);
+      ds->normals.upload(s.normals);
+      ds->triangles.upload(s.triangles);
+      ds->cell_offsets.upload(s.grid.cell_offsets);
+      ds->cell_triangles.upload(s.grid.cell_triangles);
+      ds->entry_corners.upload(s.lists.corners);
+      ds->cell_boxes.upload(s.lists.cell);
+      ds->triangle_corners.upload(s.triangle_corners);
+      SurfaceView<T> view = s.view();  // the host view's grid, with device pointers
+      view.vertices = ds->vertices.get();
+      view.triangles = ds->triangles.get();
+      view.normals = ds->normals.get();
+      view.cell_offsets = ds->cell_offsets.get();
+      view.cell_triangles = ds->cell_triangles.get();
+      view.entry_corners = ds->entry_corners.get();
+      view.cell_boxes = ds->cell_boxes.get();
+      views.push_back({view, ds->triangle_corners.get(), s.skin});
+      surfaces_.push_back(std::move(ds));
+    }
+    slide_surfaces_.upload(views);
+    const std::size_t slides = a.slide_node.size();
+    slide_node_.upload(a.slide_node);
+    slide_surface_.upload(a.slide_surface);
+    slide_triangle_.upload(a.slide_triangle);
+    snap_triangle_.allocate(slides);
+    slide_search_triangle_.upload(a.slide_triangle);
+    slide_list_count_.allocate(slides);
+    slide_list_.allocate(slides * kCandidates);
+    slide_list_distance_.allocate(slides * kCandidates);
+    slide_anchor_.allocate(slides);
+    forget_slide_lists(stream_);
+    slide_distance_.upload(a.slide_distance);
+  }
+  const PreparedModel& prep = core_.prepared();
+  work_ = fx.gravity || !prep.forces.empty() || !program.prescribed_set.empty();
+  program_in_node_ = prep.slide_node.empty() && (con_node_.size() || work_);
+  work_base_.allocate(1);
+  work_base_.zero();
+  if (work_) {
+    work_acc_.allocate(n_);
+    work_acc_.zero();
+    snap_work_acc_.allocate(n_);
+  }
+  work_partial_.allocate(std::max<std::size_t>(blocks_for(n_), tile_layers_.size()));
+  ke_partial_.allocate(std::max<std::size_t>(blocks_for(n_), tile_layers_.size()));
+  counters_.allocate(1);
+  counters_.zero();
+  bound_.upload({BlowupBound{0, 0}});
+
+  scalars_per_slot_ = core_.step_scalar_count();
+  scalars_.allocate(scalars_per_slot_ * std::size_t(batch_ + 1));
+  scalars_host_.allocate(scalars_per_slot_ * std::size_t(batch_ + 1));
+  status_.allocate(1);
+  status_.zero();
+  status_host_.allocate(1);
+  output_.allocate(n_);
+
+  // Initial state: u(0) = 0 with the constraints at t = 0; u(−1) = u(0) − v0 Δt (as the CPU).
+  SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+  {
+    buf_[0].zero();
+    // Constraints at t = 0 on the host path of the device kernels: run them on buffer 0.
+    fill_scalars(-1, 1, int(batch_));  // slot `batch_`: prescribed factors at t = 0
+    Vec3<T>* u0 = buf_[0].get();
+    const T* sc = scalars_.get() + scalars_per_slot_ * std::size_t(batch_);
+    if (con_node_.size()) launch_constraints(sc + muscles_, false, u0, u0, stream_, false);
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+    std::vector<Vec3<T>> u = download_vec(u0), up = u;
+    for (const auto& v : setup.initial_velocities)
+      for (auto nd : v.nodes)
+        for (int k = 0; k < 3; ++k)
+          up[std::size_t(nd)][k] = u[std::size_t(nd)][k] - T(v.velocity[std::size_t(k)] * dt());
+    for (auto nd : prep.rigid) up[std::size_t(nd)] = u[std::size_t(nd)];
+    SINEW_CUDA_CHECK(
+        cudaMemcpy(buf_[2].get(), up.data(), n_ * sizeof(Vec3<T>), cudaMemcpyHostToDevice));
+    SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+  }
+  core_.set_initial_energy(energies());
+  update_bound();
+  build_graph();
+}
+
+template <typename T>
+CudaEngine<T>::~CudaEngine() {
+  if (graph_) cudaGraphExecDestroy(graph_);
+  if (copy_ready_) cudaEventDestroy(copy_ready_);
+  if (stream_) cudaStreamDestroy(stream_);
+  if (copy_stream_) cudaStreamDestroy(copy_stream_);
+  for (auto st : side_streams_) cudaStreamDestroy(st);
+  for (auto ev : side_done_) cudaEventDestroy(ev);
+  if (fork_) cudaEventDestroy(fork_);
+  if (slide_fork_) cudaEventDestroy(slide_fork_);
+  if (slide_done_) cudaEventDestroy(slide_done_);
+  if (slide_stream_) cudaStreamDestroy(slide_stream_);
+}
+
+// Scalars of steps first_step .. first_step + count − 1 into slots slot0 ... (BackendCore::
+// step_scalars; a step of −1 gives the prescribed factors at t = 0, the initial constraints).
+template <typename T>
+void CudaEngine<T>::fill_scalars(std::int64_t first_step, int count, int slot0) {
+  T* h = scalars_host_.get() + scalars_per_slot_ * std::size_t(slot0);
+  for (int k = 0; k < count; ++k)
+    core_.step_scalars(first_step + k, h + scalars_per_slot_ * std::size_t(k));
+  SINEW_CUDA_CHECK(cudaMemcpyAsync(scalars_.get() + scalars_per_slot_ * std::size_t(slot0), h,
+                                   scalars_per_slot_ * std::size_t(count) * sizeof(T),
+                                   cudaMemcpyHostToDevice, stream_));
+}
+
+template class CudaEngine<float>;
+template class CudaEngine<double>;
+
+}  // namespace sinew::simulator::cuda

@@ -1,0 +1,203 @@
+// The CUDA engine's queries and state: downloads, energies, the blow-up check at sync points,
+// internal forces and reactions, element fields, checkpoint state and restore. The rules and
+// messages are the BackendCore's; this file moves data.
+#include "sinew/simulator/cuda/cuda_engine.cuh"
+
+#include <algorithm>
+#include <cmath>
+
+#include "sinew/simulator/passes/chunks.hpp"
+
+namespace sinew::simulator::cuda {
+
+template <typename T>
+std::vector<Vec3<T>> CudaEngine<T>::download_vec(const Vec3<T>* p) const {
+  std::vector<Vec3<T>> v(n_);
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  SINEW_CUDA_CHECK(cudaMemcpy(v.data(), p, n_ * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+  return v;
+}
+
+template <typename T>
+void CudaEngine<T>::upload_vec(Vec3<T>* p, const std::vector<double>& flat) {
+  const std::vector<Vec3<T>> v = unflatten<T>(flat);
+  SINEW_CUDA_CHECK(cudaMemcpy(p, v.data(), n_ * sizeof(Vec3<T>), cudaMemcpyHostToDevice));
+}
+
+template <typename T>
+double CudaEngine<T>::work_sum(const double* acc) const {
+  double base = 0;
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  SINEW_CUDA_CHECK(cudaMemcpy(&base, work_base_.get(), sizeof(double), cudaMemcpyDeviceToHost));
+  if (!work_) return base;
+  std::vector<double> a(n_);
+  SINEW_CUDA_CHECK(cudaMemcpy(a.data(), acc, n_ * sizeof(double), cudaMemcpyDeviceToHost));
+  double w = 0;
+  for (double x : a) w += x;
+  return base + w;
+}
+
+template <typename T>
+double CudaEngine<T>::external_work() const {
+  return work_sum(work_acc_.get());
+}
+
+template <typename T>
+void CudaEngine<T>::compute_energy_terms(double& strain, double& hourglass) {
+  if (element_energy_.size() != 2 * e_) element_energy_.allocate(2 * e_);
+  if (!elem_force_.size()) elem_force_.allocate(e_ * 8);
+  DeviceArray<T> a;
+  upload_activation(a);
+  launch_elements(buffer(step_, 0), a.get(), 2, stream_);
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  const auto en = element_energy_.download();
+  // Summed per collection in element-list order, chunk by chunk (the CPU's order).
+  strain = hourglass = 0;
+  for (const auto& c : core_.plan().collections) {
+    for (std::size_t b = 0; b < c.elements.size(); b += kChunk) {
+      double s = 0, hg = 0;
+      for (std::size_t i = b; i < std::min(c.elements.size(), b + kChunk); ++i) {
+        s += en[2 * std::size_t(c.elements[i])];
+        hg += en[2 * std::size_t(c.elements[i]) + 1];
+      }
+      strain += s;
+      hourglass += hg;
+    }
+  }
+}
+
+template <typename T>
+Energies CudaEngine<T>::energies() {
+  Energies e;
+  e.step = step_;
+  e.time = time();
+  compute_energy_terms(e.strain, e.hourglass);
+  e.kinetic = kinetic_energy(download_vec(buffer(step_, 0)), download_vec(buffer(step_, 2)));
+  e.external_work = external_work();
+  return e;
+}
+
+template <typename T>
+void CudaEngine<T>::check_blowup(double work) {
+  const auto u = download_vec(buffer(step_, 0)), up = download_vec(buffer(step_, 2));
+  const double ke = kinetic_energy(u, up);
+  double strain = 0, hg = 0;
+  compute_energy_terms(strain, hg);
+  if (!core_.blown_up(ke, strain + hg, work)) return;
+  double move = 0;
+  const Index worst = core_.fastest_node(u.data(), up.data(), move);
+  core_.fail_blowup(step_, ke, work, worst, std::sqrt(move) / dt());
+}
+
+template <typename T>
+std::vector<double> CudaEngine<T>::displacements() const {
+  // Frames leave on the copy stream into pinned memory, after the step work queued so far.
+  SINEW_CUDA_CHECK(cudaEventRecord(copy_ready_, stream_));
+  SINEW_CUDA_CHECK(cudaStreamWaitEvent(copy_stream_, copy_ready_, 0));
+  SINEW_CUDA_CHECK(cudaMemcpyAsync(output_.get(), buffer(step_, 0), n_ * sizeof(Vec3<T>),
+                                   cudaMemcpyDeviceToHost, copy_stream_));
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(copy_stream_));
+  return flatten(output_.get(), n_);
+}
+
+template <typename T>
+std::vector<double> CudaEngine<T>::velocities() const {
+  const auto u = download_vec(buffer(step_, 0)), up = download_vec(buffer(step_, 2));
+  return core_.velocities(u.data(), up.data());
+}
+
+template <typename T>
+std::vector<Vec3<T>> CudaEngine<T>::device_internal_forces() {
+  if (!elem_force_.size()) elem_force_.allocate(e_ * 8);
+  DeviceArray<T> a;
+  upload_activation(a);
+  launch_elements(buffer(step_, 0), a.get(), 0, stream_);
+  const NodeData<T> nodes{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
+                          std::int32_t(n_)};
+  forall(n_, stream_, GatherBody<T>{nodes, elem_force_.get(), f_.get()});
+  return download_vec(f_.get());
+}
+
+template <typename T>
+std::vector<double> CudaEngine<T>::internal_forces() {
+  const auto f = device_internal_forces();
+  return flatten(f.data(), n_);
+}
+
+template <typename T>
+std::array<double, 3> CudaEngine<T>::reaction(const std::vector<Index>& nodes) {
+  core_.check_node_ids(nodes, "reaction");  // before any device work
+  const auto f = device_internal_forces();
+  return core_.reaction(arrays_, nodes, f.data(), step_);
+}
+
+template <typename T>
+ElementFields CudaEngine<T>::element_fields() {
+  // Output-interval work: computed on the host from u(n) with the same loop body as the CPU's.
+  const auto u = download_vec(buffer(step_, 0));
+  return core_.element_fields(arrays_, u.data(), step_, 0);
+}
+
+template <typename T>
+State CudaEngine<T>::state() const {
+  return core_.make_state(step_, download_vec(buffer(step_, 0)), download_vec(buffer(step_, 2)),
+                          slide_triangle_.download(), external_work());
+}
+
+template <typename T>
+void CudaEngine<T>::restore(const State& s) {
+  core_.check_state(s);
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  step_ = s.step;
+  upload_vec(buffer(step_, 0), s.u);
+  upload_vec(buffer(step_, 2), s.u_prev);
+  if (!s.sliding_triangle.empty()) {
+    SINEW_CUDA_CHECK(cudaMemcpy(slide_triangle_.get(), s.sliding_triangle.data(),
+                                slide_triangle_.bytes(), cudaMemcpyHostToDevice));
+    SINEW_CUDA_CHECK(cudaMemcpy(slide_search_triangle_.get(), s.sliding_triangle.data(),
+                                slide_search_triangle_.bytes(), cudaMemcpyHostToDevice));
+  }
+  SINEW_CUDA_CHECK(
+      cudaMemcpy(work_base_.get(), &s.external_work, sizeof(double), cudaMemcpyHostToDevice));
+  if (work_acc_.size()) work_acc_.zero();
+  if (f_sum_.size()) f_sum_.zero();
+  forget_slide_lists(stream_);
+  SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+  core_.set_energy_reference(s.energy_reference);
+  update_bound();
+}
+
+template <typename T>
+double CudaEngine<T>::bytes_per_step() const {
+  // Elements: 32 B of node ids + row id + (u of 8 nodes, shared with neighbours: counted once per
+  // node below) + forces written (gather: 8 × 3 T) ; nodes: u, u(n−1) read, u(n+1) written,
+  // inverse mass, incidence (gather: offsets + 8 entries per element read back) ...
+  const double t = sizeof(T);
+  double b = double(e_) * (32 + 4 + 4);            // node ids, collection list, row id
+  b += double(n_) * (3 * t) * 3 + double(n_) * t;  // u, u(n−1), u(n+1), 1/M
+  if (options_.assembly == ForceAssembly::tiled)
+    b -= double(e_) * 36;  // no node-id lists and collection lists: the tile tables (below)
+  if (options_.assembly == ForceAssembly::tiled)
+    b += double(tile_window_.bytes() + tile_slot_.bytes() + tile_layers_.bytes());
+  else if (options_.assembly == ForceAssembly::gather)
+    b += double(e_) * 8 * 3 * t * 2 + double(e_) * 8 * 4 +
+         double(n_) * 4;  // forces out + in, incidence
+  else
+    b += double(n_) * 3 * t * 2;  // atomic sums read and cleared (the adds hit L2)
+  if (core_.setup().effects.gravity) b += double(n_) * 3 * t;
+  if (core_.setup().effects.muscles)
+    b += double(core_.prepared().muscle_id.size()) * (4 + t + 3 * t) + double(e_) * 4;
+  // Sliding nodes (constraint program, listed path): node id, offsets, op, surface, rest distance,
+  // triangle read + written, list count, anchor, u(n+1) read + written, rest, the first two listed
+  // ids and distances (most nodes test their warm start only; the triangles' corners come from L2
+  // and are not counted).
+  b += double(core_.prepared().slide_node.size()) *
+       (4 + 4 + 4 + 4 + t + 8 + 4 + 3 * t + 6 * t + 3 * t + 8 + 2 * t);
+  return b;
+}
+
+// Each file of the engine instantiates the members it defines (cuda_engine.cuh).
+template class CudaEngine<float>;
+template class CudaEngine<double>;
+
+}  // namespace sinew::simulator::cuda

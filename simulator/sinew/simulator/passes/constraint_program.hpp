@@ -1,0 +1,112 @@
+#pragma once
+// The loads and constraints of a step as one program per constrained node, written once for both
+// engines: the host builds it (backend_core.cpp, make_constraint_program) in the one order of
+// loads and constraints, and the CPU's constraint pass (engine.cpp) and the CUDA node, tile and
+// constraint kernels run it with run_program.
+#include <cstdint>
+
+#include "sinew/common/host_device.hpp"
+#include "sinew/common/math.hpp"
+#include "sinew/simulator/passes/sliding_lists.hpp"
+#include "sinew/simulator/physics/element.hpp"
+
+namespace sinew::simulator {
+
+// The loads and constraints of a step as one program per constrained node: op = kind << 28 | arg,
+// a node's ops in the CPU's order (nodal forces by set, capture of u*, sliding, planes in list
+// order, prescribed sets in order, rigid). Each op reads and writes only its node, so one thread
+// per node running its ops in that order gives the CPU's result with no race (a node in two sets,
+// or on two planes, included).
+enum ConstraintOp : std::int32_t {
+  kOpForce = 0,      // arg: force set
+  kOpCapture = 1,    // arg: prescribed entry q (u* = u)
+  kOpSlide = 2,      // arg: sliding entry
+  kOpPlane = 3,      // arg: plane entry (its unit normal)
+  kOpPrescribe = 4,  // arg: prescribed entry q
+  kOpRigid = 5,
+};
+constexpr std::int32_t kOpShift = 28, kOpArg = (1 << kOpShift) - 1;
+
+template <typename T>
+struct ConstraintData {
+  const std::int32_t* node;    // C constrained nodes
+  const std::int32_t* offset;  // C + 1
+  const std::int32_t* op;
+  std::int32_t count;
+  const T* inverse_mass;
+  physics::CentralDifference<T> cd;
+  const Vec3<T>* force_per_node;        // per force set
+  const std::int32_t* prescribed_set;   // per prescribed entry
+  const Vec3<T>* prescribed_value;      // per prescribed set
+  const std::int32_t* prescribed_mask;  // per prescribed set: bit c = component c prescribed
+  Vec3<T>* prescribed_free;             // per prescribed entry: u* before constraints
+  const Vec3<T>* plane_normal;          // per plane entry
+  SlideData<T> slide;
+  const Vec3<T>* rest;
+  const Vec3<T>* gravity;  // per node; null without gravity
+  std::int32_t force_sets;
+};
+
+// Runs ops [begin, end) of node i on v (its u(n+1) after the update) and, with `work`, adds the
+// work of its nodal forces and prescribed constraint forces, Σ R · (u(n+1) − u(n−1))/2 with the
+// constraint force (u − u*)/A, to w. factor: [force factors at t_n | prescribed factors at t_n+1].
+// With `loads` off (the initial constraints at t = 0) nodal forces and captures are skipped.
+// kSlide: 0 the model has no sliding (the op is compiled out); 1 sliding with the list refresh
+// (and grid search) inline; 2 sliding with lists refreshed ahead by slide_refresh_kernel.
+// `start`: slide_start of sliding entry `started` when loaded ahead (−1: none).
+template <typename T, int kSlide>
+SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, std::int32_t begin,
+                                    std::int32_t end, const T* factor, bool loads, Vec3<T> v,
+                                    const Vec3<T>* up, bool work, double& w,
+                                    const SlideStart<T>& start = {}, std::int32_t started = -1) {
+  for (std::int32_t q = begin; q < end; ++q) {
+    const std::int32_t code = d.op[q], arg = code & kOpArg;
+    switch (code >> kOpShift) {
+      case kOpForce:
+        if (loads)
+          physics::add_nodal_force(d.cd, d.inverse_mass[i], factor[arg] * d.force_per_node[arg], v);
+        break;
+      case kOpCapture:
+        if (loads) d.prescribed_free[arg] = v;
+        break;
+      case kOpSlide:
+        if constexpr (kSlide != 0) {
+          SlideStart<T> st = start;
+          if (arg != started) st = slide_start(d.slide, arg, false);
+          v = slide_entry<T, kSlide == 1>(d.slide, arg, st, d.rest[i], v);
+        }
+        break;
+      case kOpPlane:
+        v = physics::project_to_plane(v, d.plane_normal[arg]);
+        break;
+      case kOpPrescribe: {
+        const std::int32_t set = d.prescribed_set[arg], mask = d.prescribed_mask[set];
+        const bool comps[3] = {(mask & 1) != 0, (mask & 2) != 0, (mask & 4) != 0};
+        physics::prescribe(factor[d.force_sets + set], d.prescribed_value[set], comps, v);
+        break;
+      }
+      default:
+        v = Vec3<T>{T(0), T(0), T(0)};
+    }
+  }
+  if (work && begin < end) {
+    const Vec3<T> vp = up[i];
+    for (std::int32_t q = begin; q < end; ++q) {
+      const std::int32_t code = d.op[q], arg = code & kOpArg, kind = code >> kOpShift;
+      if (kind == kOpForce) {
+        const double f = double(factor[arg]);
+        for (int k = 0; k < 3; ++k)
+          w += f * double(d.force_per_node[arg][k]) * 0.5 * (double(v[k]) - double(vp[k]));
+      } else if (kind == kOpPrescribe) {
+        const double a = double(d.cd.a_over_inverse_mass) * double(d.inverse_mass[i]);
+        for (int k = 0; k < 3; ++k) {
+          const double fc = (double(v[k]) - double(d.prescribed_free[arg][k])) / a;
+          w += fc * 0.5 * (double(v[k]) - double(vp[k]));
+        }
+      }
+    }
+  }
+  return v;
+}
+
+}  // namespace sinew::simulator
