@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/wrinkles.hpp"
+#include "sinew/postprocess/wrinkles.hpp"
 
 #include <fmt/format.h>
 
@@ -10,7 +10,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 using V3 = std::array<double, 3>;
@@ -662,4 +662,4 @@ WrinkleReport measure_wrinkles(const std::vector<std::int32_t>& triangles,
   return report;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -20,15 +20,15 @@
 #include <vector>
 
 #include "sinew/common/error.hpp"
-#include "sinew/simulator/export/contact_sheet.hpp"
-#include "sinew/simulator/export/png_writer.hpp"
-#include "sinew/simulator/export/render_session.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/contact_sheet.hpp"
+#include "sinew/postprocess/png_writer.hpp"
+#include "sinew/postprocess/render_session.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
 namespace {
 
 using namespace sinew;
-using namespace sinew::simulator::visual;
+using namespace sinew::postprocess;
 
 bool on_path(const std::string& program) {
   const char* path = std::getenv("PATH");

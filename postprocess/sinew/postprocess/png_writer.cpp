@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/png_writer.hpp"
+#include "sinew/postprocess/png_writer.hpp"
 
 #include <png.h>
 
@@ -8,7 +8,7 @@
 
 #include "sinew/common/error.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 struct FileCloser {
@@ -128,4 +128,4 @@ Image read_png(const std::string& path) {
   return img;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -23,14 +23,14 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
-#include "sinew/simulator/export/wrinkles.hpp"
+#include "sinew/postprocess/results_reader.hpp"
+#include "sinew/postprocess/wrinkles.hpp"
 #include "sinew/simulator/hdf5_io.hpp"
 
 namespace {
 
 using namespace sinew;
-using namespace sinew::simulator::visual;
+using namespace sinew::postprocess;
 
 constexpr double kMm = 1e3;
 

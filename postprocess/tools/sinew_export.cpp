@@ -12,13 +12,13 @@
 #include <string>
 
 #include "sinew/common/error.hpp"
-#include "sinew/simulator/export/gltf_writer.hpp"
-#include "sinew/simulator/export/pc2_writer.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/gltf_writer.hpp"
+#include "sinew/postprocess/pc2_writer.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
 int main(int argc, char** argv) {
   using namespace sinew;
-  using namespace sinew::simulator::visual;
+  using namespace sinew::postprocess;
   CLI::App app{"sinew-export: glTF, PC2 + OBJ and OBJ sequences of a sinew results file's surface"};
   std::string results, surface, glb, pc2, rest_obj, obj_dir, up = "y";
   double time_scale = 1.0;

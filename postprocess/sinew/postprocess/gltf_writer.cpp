@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/gltf_writer.hpp"
+#include "sinew/postprocess/gltf_writer.hpp"
 
 #include <fmt/format.h>
 
@@ -13,7 +13,7 @@
 
 #include "sinew/common/error.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 constexpr std::uint32_t kMagic = 0x46546C67;      // "glTF"
@@ -186,4 +186,4 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
   if (!ok) throw IoError(path, "", "cannot write (disk full?)");
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess
