@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <string>
 
+#include "results_options.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/postprocess/gltf_writer.hpp"
 #include "sinew/postprocess/pc2_writer.hpp"
@@ -23,12 +24,7 @@ int main(int argc, char** argv) {
   std::string results, surface, glb, pc2, rest_obj, obj_dir, up = "y";
   double time_scale = 1.0;
   bool linear = false, list = false;
-  app.add_option("results", results, "results.h5 written by sinew-simulate")
-      ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--surface", surface,
-                 "Visual surface (default: the only one; \"volume\": the volume's boundary, also "
-                 "used when the file has no surface)");
+  add_results_options(app, results, surface);
   app.add_flag("--list", list, "List the stored visual surfaces and exit");
   app.add_option("--glb", glb, "glTF 2.0 binary: rest mesh + one morph target per frame");
   app.add_option("--time-scale", time_scale,
