@@ -2,9 +2,9 @@
 // PNG files through libpng: 8-bit RGB, no interlacing.
 #include <string>
 
-#include "sinew/simulator/export/image.hpp"
+#include "sinew/postprocess/image.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 // Writes `image` to `path`; throws IoError when the file cannot be written.
 void write_png(const std::string& path, const Image& image);
@@ -14,4 +14,4 @@ void write_png(const std::string& path, const Image& image);
 // not a readable PNG.
 Image read_png(const std::string& path);
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

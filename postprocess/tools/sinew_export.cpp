@@ -11,24 +11,20 @@
 #include <cstdio>
 #include <string>
 
+#include "results_options.hpp"
 #include "sinew/common/error.hpp"
-#include "sinew/simulator/export/gltf_writer.hpp"
-#include "sinew/simulator/export/pc2_writer.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/gltf_writer.hpp"
+#include "sinew/postprocess/pc2_writer.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
 int main(int argc, char** argv) {
   using namespace sinew;
-  using namespace sinew::simulator::visual;
+  using namespace sinew::postprocess;
   CLI::App app{"sinew-export: glTF, PC2 + OBJ and OBJ sequences of a sinew results file's surface"};
   std::string results, surface, glb, pc2, rest_obj, obj_dir, up = "y";
   double time_scale = 1.0;
   bool linear = false, list = false;
-  app.add_option("results", results, "results.h5 written by sinew-simulate")
-      ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--surface", surface,
-                 "Visual surface (default: the only one; \"volume\": the volume's boundary, also "
-                 "used when the file has no surface)");
+  add_results_options(app, results, surface);
   app.add_flag("--list", list, "List the stored visual surfaces and exit");
   app.add_option("--glb", glb, "glTF 2.0 binary: rest mesh + one morph target per frame");
   app.add_option("--time-scale", time_scale,

@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "sinew/simulator/export/image.hpp"
+#include "sinew/postprocess/image.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 using Point = std::array<double, 3>;
 
@@ -96,4 +96,4 @@ Image render(const std::vector<float>& positions, const std::vector<std::int32_t
 std::vector<float> vertex_normals(const std::vector<float>& positions,
                                   const std::vector<std::int32_t>& triangles);
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/render_session.hpp"
+#include "sinew/postprocess/render_session.hpp"
 
 #include <fmt/format.h>
 
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 FrameRenderer::FrameRenderer(const SurfaceAnimation& a, const FrameRenderSettings& s)
     : animation_(a), settings_(s) {
@@ -31,7 +31,7 @@ FrameRenderer::FrameRenderer(const SurfaceAnimation& a, const FrameRenderSetting
   }
   const int strip = s.color_displacement ? color_bar_strip_width(s.width) : 0;
   camera_ = frame_view(corners, s.view, static_cast<double>(s.width - strip) / s.height, s.up);
-  if (s.color_displacement) max_displacement_ = visual::max_displacement(a);
+  if (s.color_displacement) max_displacement_ = postprocess::max_displacement(a);
 }
 
 Image FrameRenderer::render(std::size_t frame) const {
@@ -51,7 +51,7 @@ Image FrameRenderer::render(std::size_t frame) const {
     o.coloring = &coloring;
   }
   if (settings_.caption) o.caption = frame_label(animation_, frame);
-  return visual::render(animation_.frames.at(frame), animation_.triangles, o);
+  return postprocess::render(animation_.frames.at(frame), animation_.triangles, o);
 }
 
 std::string frame_label(const SurfaceAnimation& a, std::size_t frame) {
@@ -74,4 +74,4 @@ std::vector<std::size_t> spread_frames(std::size_t frames, std::size_t count) {
   return out;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

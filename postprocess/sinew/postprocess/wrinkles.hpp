@@ -65,9 +65,9 @@
 #include <string>
 #include <vector>
 
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 struct WrinkleOptions {
   int up = 2;                   // axis of the height (0 = x, 1 = y, 2 = z)
@@ -166,4 +166,4 @@ double detrend_retention(double wavelength, double sigma);
 // Parses an axis name "x", "y" or "z" into 0, 1, 2; throws ConfigError naming `field`.
 int parse_axis(const std::string& name, const std::string& field);
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

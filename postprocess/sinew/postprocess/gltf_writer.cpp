@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/gltf_writer.hpp"
+#include "sinew/postprocess/gltf_writer.hpp"
 
 #include <fmt/format.h>
 
@@ -13,7 +13,7 @@
 
 #include "sinew/common/error.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 constexpr std::uint32_t kMagic = 0x46546C67;      // "glTF"
@@ -59,6 +59,20 @@ std::pair<nlohmann::json, nlohmann::json> bounds(const float* p, std::size_t cou
   return {nlohmann::json{lo[0], lo[1], lo[2]}, nlohmann::json{hi[0], hi[1], hi[2]}};
 }
 
+// Adds `count` × 3 floats as a VEC3 float accessor with its min and max (glTF requires them on
+// POSITION, morph targets included); returns the accessor's index.
+int vec3_accessor(Builder& b, const std::vector<float>& p, std::size_t count) {
+  const auto [lo, hi] = bounds(p.data(), count);
+  const int view = b.view(p.data(), p.size() * 4, kArrayBuffer);
+  return b.accessor({{"bufferView", view},
+                     {"byteOffset", 0},
+                     {"componentType", kFloat},
+                     {"count", count},
+                     {"type", "VEC3"},
+                     {"min", lo},
+                     {"max", hi}});
+}
+
 }  // namespace
 
 void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOptions& o) {
@@ -85,29 +99,12 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
                                   {"componentType", kUnsignedInt},
                                   {"count", indices.size()},
                                   {"type", "SCALAR"}});
-  const auto [rlo, rhi] = bounds(rest.data(), nv);
-  const int pos_view = b.view(rest.data(), rest.size() * 4, kArrayBuffer);
-  const int pos_acc = b.accessor({{"bufferView", pos_view},
-                                  {"byteOffset", 0},
-                                  {"componentType", kFloat},
-                                  {"count", nv},
-                                  {"type", "VEC3"},
-                                  {"min", rlo},
-                                  {"max", rhi}});
+  const int pos_acc = vec3_accessor(b, rest, nv);
   nlohmann::json targets = nlohmann::json::array(), names = nlohmann::json::array();
   for (std::size_t k = 0; k < nf; ++k) {
     auto delta = turn(a.frames[k]);
     for (std::size_t i = 0; i < delta.size(); ++i) delta[i] -= rest[i];
-    const auto [lo, hi] = bounds(delta.data(), nv);
-    const int view = b.view(delta.data(), delta.size() * 4, kArrayBuffer);
-    const int acc = b.accessor({{"bufferView", view},
-                                {"byteOffset", 0},
-                                {"componentType", kFloat},
-                                {"count", nv},
-                                {"type", "VEC3"},
-                                {"min", lo},
-                                {"max", hi}});
-    targets.push_back({{"POSITION", acc}});
+    targets.push_back({{"POSITION", vec3_accessor(b, delta, nv)}});
     names.push_back(fmt::format("frame_{:04}", k));
   }
   std::vector<float> times(nf), weights(nf * nf, 0.0f);
@@ -186,4 +183,4 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
   if (!ok) throw IoError(path, "", "cannot write (disk full?)");
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/pc2_writer.hpp"
+#include "sinew/postprocess/pc2_writer.hpp"
 
 #include <fmt/format.h>
 
@@ -10,7 +10,7 @@
 
 #include "sinew/common/error.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 static_assert(std::endian::native == std::endian::little,
@@ -94,4 +94,4 @@ std::vector<std::string> write_obj_sequence(const std::string& directory, const 
   return paths;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 inline constexpr std::size_t kPc2HeaderBytes = 32;
 
@@ -43,4 +43,4 @@ std::vector<std::string> write_obj_sequence(const std::string& directory,
                                             const SurfaceAnimation& animation,
                                             const std::string& prefix = "frame");
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

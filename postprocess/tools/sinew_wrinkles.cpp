@@ -19,18 +19,20 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "results_options.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
-#include "sinew/simulator/export/wrinkles.hpp"
+#include "sinew/postprocess/results_reader.hpp"
+#include "sinew/postprocess/wrinkles.hpp"
 #include "sinew/simulator/hdf5_io.hpp"
 
 namespace {
 
 using namespace sinew;
-using namespace sinew::simulator::visual;
+using namespace sinew::postprocess;
 
 constexpr double kMm = 1e3;
 
@@ -102,6 +104,18 @@ nlohmann::ordered_json json_num(double v) {
   return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
 }
 
+// Appends the figures a profile and the summary share (WrinkleProfile, WrinkleSummary: same
+// names, same meaning), in the JSON's order: spectral wavelength, depths, RMS, strains.
+template <class Figures>
+void put_shared_figures(nlohmann::ordered_json& j, const Figures& f) {
+  j["spectral_wavelength_mm"] = json_mm(f.spectral_wavelength);
+  j["depth_mean_mm"] = json_mm(f.depth_mean);
+  j["depth_max_mm"] = json_mm(f.depth_max);
+  j["rms_mm"] = json_mm(f.rms);
+  j["strain"] = json_num(f.strain);
+  j["strain_min"] = json_num(f.strain_min);
+}
+
 std::ofstream open_out(const std::string& path) {
   std::ofstream out(path);
   if (!out) throw IoError(path, "", "cannot open for writing");
@@ -118,10 +132,7 @@ int main(int argc, char** argv) {
   int frame = -1, profiles = 9;
   double time = 0, width_mm = 4.0, depth_mm = 0.02, spacing_mm = 0, facing = 0.5;
   bool peak = false, quiet = false;
-  app.add_option("results", results, "results.h5 written by sinew-simulate")
-      ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--surface", surface, "Visual surface (default: the only one)");
+  add_results_options(app, results, surface);
   auto* frame_opt = app.add_option("--frame", frame, "Frame index (default: the last)")
                         ->check(CLI::NonNegativeNumber);
   auto* time_opt =
@@ -314,22 +325,17 @@ int main(int argc, char** argv) {
         for (double v : *o.region) r.push_back(v * kMm);
         j["options"]["region_mm"] = r;
       }
-      j["summary"] = {{"profiles_used", s.profiles_used},
-                      {"folds", s.folds},
-                      {"folds_mean", s.folds_mean},
-                      {"wavelength_mean_mm", json_mm(s.wavelength_mean)},
-                      {"wavelength_std_mm", json_mm(s.wavelength_std)},
-                      {"wavelength_count", s.wavelength_count},
-                      {"spectral_wavelength_mm", json_mm(s.spectral_wavelength)},
-                      {"depth_mean_mm", json_mm(s.depth_mean)},
-                      {"depth_max_mm", json_mm(s.depth_max)},
-                      {"rms_mm", json_mm(s.rms)},
-                      {"strain", json_num(s.strain)},
-                      {"strain_min", json_num(s.strain_min)},
-                      {"detrend_retention", json_num(s.retention)},
-                      {"layer_locking", json_num(s.layer_locking)},
-                      {"layers_spanned", json_num(s.layers_spanned)},
-                      {"layer_period_mm", json_mm(s.layer_period)}};
+      auto& summary = j["summary"] = {{"profiles_used", s.profiles_used},
+                                      {"folds", s.folds},
+                                      {"folds_mean", s.folds_mean},
+                                      {"wavelength_mean_mm", json_mm(s.wavelength_mean)},
+                                      {"wavelength_std_mm", json_mm(s.wavelength_std)},
+                                      {"wavelength_count", s.wavelength_count}};
+      put_shared_figures(summary, s);
+      summary["detrend_retention"] = json_num(s.retention);
+      summary["layer_locking"] = json_num(s.layer_locking);
+      summary["layers_spanned"] = json_num(s.layers_spanned);
+      summary["layer_period_mm"] = json_mm(s.layer_period);
       auto& arr = j["profiles"] = nlohmann::ordered_json::array();
       for (const auto& p : rep.profiles) {
         nlohmann::ordered_json folds = nlohmann::ordered_json::array();
@@ -341,20 +347,16 @@ int main(int argc, char** argv) {
                            {"layer_phase", json_num(fo.layer_phase)},
                            {"layer_period_mm", json_mm(fo.layer_period)}});
         }
-        arr.push_back({{"across_mm", p.across * kMm},
-                       {"samples", p.samples},
-                       {"length_rest_mm", p.length_rest * kMm},
-                       {"length_mm", p.length * kMm},
-                       {"folds", p.folds.size()},
-                       {"wavelength_mean_mm", json_mm(p.wavelength_mean)},
-                       {"wavelength_std_mm", json_mm(p.wavelength_std)},
-                       {"spectral_wavelength_mm", json_mm(p.spectral_wavelength)},
-                       {"depth_mean_mm", json_mm(p.depth_mean)},
-                       {"depth_max_mm", json_mm(p.depth_max)},
-                       {"rms_mm", json_mm(p.rms)},
-                       {"strain", json_num(p.strain)},
-                       {"strain_min", json_num(p.strain_min)},
-                       {"fold_list", folds}});
+        nlohmann::ordered_json row = {{"across_mm", p.across * kMm},
+                                      {"samples", p.samples},
+                                      {"length_rest_mm", p.length_rest * kMm},
+                                      {"length_mm", p.length * kMm},
+                                      {"folds", p.folds.size()},
+                                      {"wavelength_mean_mm", json_mm(p.wavelength_mean)},
+                                      {"wavelength_std_mm", json_mm(p.wavelength_std)}};
+        put_shared_figures(row, p);
+        row["fold_list"] = std::move(folds);
+        arr.push_back(std::move(row));
       }
       auto out = open_out(json_path);
       out << j.dump(2) << '\n';

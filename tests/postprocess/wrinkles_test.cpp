@@ -18,14 +18,14 @@
 #include <vector>
 
 #include "sinew/common/error.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
-#include "sinew/simulator/export/wrinkles.hpp"
+#include "sinew/postprocess/results_reader.hpp"
+#include "sinew/postprocess/wrinkles.hpp"
 #include "sinew/simulator/hdf5_io.hpp"
 #include "sinew/simulator/results_writer.hpp"
 
 namespace {
 
-using namespace sinew::simulator::visual;
+using namespace sinew::postprocess;
 namespace fs = std::filesystem;
 namespace h5 = sinew::simulator::h5;
 constexpr double kPi = std::numbers::pi;

@@ -1,10 +1,10 @@
-#include "sinew/simulator/export/image.hpp"
+#include "sinew/postprocess/image.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cctype>
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 struct Glyph {
@@ -135,4 +135,4 @@ void draw_text(Image& image, int x, int y, const std::string& text, Rgb color, i
   }
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

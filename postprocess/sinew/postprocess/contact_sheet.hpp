@@ -3,9 +3,9 @@
 #include <string>
 #include <vector>
 
-#include "sinew/simulator/export/image.hpp"
+#include "sinew/postprocess/image.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 struct ContactSheetOptions {
   int columns = 4;
@@ -25,4 +25,4 @@ Image contact_sheet(const std::vector<Image>& frames, const std::vector<std::str
 // The height of a tile's label band: the glyph height plus padding.
 int contact_sheet_label_height(const ContactSheetOptions& options);
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 struct Rgb {
   std::uint8_t r = 0, g = 0, b = 0;
@@ -34,4 +34,4 @@ inline int text_height(int scale) {
 // Draws `text` with its top-left corner at (x, y); characters without a glyph draw as a box.
 void draw_text(Image& image, int x, int y, const std::string& text, Rgb color, int scale);
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -19,16 +19,17 @@
 #include <string>
 #include <vector>
 
+#include "results_options.hpp"
 #include "sinew/common/error.hpp"
-#include "sinew/simulator/export/contact_sheet.hpp"
-#include "sinew/simulator/export/png_writer.hpp"
-#include "sinew/simulator/export/render_session.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/contact_sheet.hpp"
+#include "sinew/postprocess/png_writer.hpp"
+#include "sinew/postprocess/render_session.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
 namespace {
 
 using namespace sinew;
-using namespace sinew::simulator::visual;
+using namespace sinew::postprocess;
 
 bool on_path(const std::string& program) {
   const char* path = std::getenv("PATH");
@@ -93,12 +94,7 @@ int main(int argc, char** argv) {
                                 gif, mp4;
   int frame = -1, columns = 4, sheet_frames = 8, fps = 12;
   bool all = false;
-  app.add_option("results", results, "results.h5 written by sinew-simulate")
-      ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--surface", surface,
-                 "Visual surface (default: the only one; \"volume\": the volume's boundary, also "
-                 "used when the file has no surface)");
+  add_results_options(app, results, surface);
   auto* frame_opt = app.add_option("--frame", frame, "Frame index to draw (default: the last)")
                         ->check(CLI::NonNegativeNumber);
   app.add_flag("--all", all, "Draw every frame (with --sequence)")->excludes(frame_opt);

@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "sinew/simulator/export/rasterizer.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/rasterizer.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 struct FrameRenderSettings {
   int width = 800, height = 600;
@@ -43,4 +43,4 @@ std::string frame_label(const SurfaceAnimation& animation, std::size_t frame);
 // (all frames when count ≥ F; the last frame alone when count = 1).
 std::vector<std::size_t> spread_frames(std::size_t frames, std::size_t count);
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 struct SurfaceAnimation {
   std::string file;                     // the results file it came from ("" when built in memory)
@@ -61,4 +61,4 @@ std::vector<float> displacement_magnitude(const SurfaceAnimation& animation, std
 // Largest displacement magnitude over all frames and vertices, m.
 float max_displacement(const SurfaceAnimation& animation);
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
 #include <fmt/format.h>
 #include <hdf5.h>
@@ -14,8 +14,12 @@
 #include "sinew/simulator/hdf5_io.hpp"
 #include "sinew/simulator/results_writer.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
+
+namespace h5 = simulator::h5;
+using simulator::kResultsFormatName;
+using simulator::kResultsFormatVersion;
 
 h5::Handle open_results(const std::string& path) {
   h5::quiet_errors();
@@ -272,4 +276,4 @@ float max_displacement(const SurfaceAnimation& a) {
   return m;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

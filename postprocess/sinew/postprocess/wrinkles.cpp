@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/wrinkles.hpp"
+#include "sinew/postprocess/wrinkles.hpp"
 
 #include <fmt/format.h>
 
@@ -6,11 +6,12 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 using V3 = std::array<double, 3>;
@@ -101,6 +102,13 @@ void check_arrays(const std::vector<std::int32_t>& tri, const std::vector<float>
   }
 }
 
+// The upper median of v (v.size() / 2 in sorted order); NaN when v is empty.
+double upper_median(std::vector<double> v) {
+  if (v.empty()) return kNaN;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
 double median_edge(const std::vector<std::int32_t>& tri, const std::vector<float>& rest) {
   std::vector<double> e;
   e.reserve(tri.size());
@@ -109,8 +117,7 @@ double median_edge(const std::vector<std::int32_t>& tri, const std::vector<float
       e.push_back(norm(sub(vertex(rest, tri[t + k]), vertex(rest, tri[t + (k + 1) % 3]))));
     }
   }
-  std::nth_element(e.begin(), e.begin() + static_cast<std::ptrdiff_t>(e.size() / 2), e.end());
-  return e[e.size() / 2];
+  return upper_median(std::move(e));
 }
 
 // Area-weighted vertex normals (unnormalised sums of the triangles' cross products).
@@ -622,14 +629,7 @@ WrinkleReport measure_wrinkles(const std::vector<std::int32_t>& triangles,
       if (options.voxel_size > 0) periods.push_back(f.layer_period);
     }
   }
-  if (!periods.empty()) {
-    std::nth_element(periods.begin(),
-                     periods.begin() + static_cast<std::ptrdiff_t>(periods.size() / 2),
-                     periods.end());
-    sum.layer_period = periods[periods.size() / 2];
-  } else {
-    sum.layer_period = kNaN;
-  }
+  sum.layer_period = upper_median(std::move(periods));
   sum.layers_spanned = nf > 0 ? (hmax - hmin) / options.voxel_size : kNaN;
   if (sum.profiles_used == 0) {
     throw GeometryError(file, "triangles",
@@ -643,14 +643,7 @@ WrinkleReport measure_wrinkles(const std::vector<std::int32_t>& triangles,
   sum.wavelength_mean = mean_of(gaps);
   sum.wavelength_std = std_of(gaps);
   sum.wavelength_count = gaps.size();
-  if (!spectral.empty()) {
-    std::nth_element(spectral.begin(),
-                     spectral.begin() + static_cast<std::ptrdiff_t>(spectral.size() / 2),
-                     spectral.end());
-    sum.spectral_wavelength = spectral[spectral.size() / 2];
-  } else {
-    sum.spectral_wavelength = kNaN;
-  }
+  sum.spectral_wavelength = upper_median(std::move(spectral));
   sum.depth_mean = mean_of(depths);
   sum.depth_max = depths.empty() ? 0 : *std::max_element(depths.begin(), depths.end());
   sum.rms = std::sqrt(sq / static_cast<double>(samples));
@@ -662,4 +655,4 @@ WrinkleReport measure_wrinkles(const std::vector<std::int32_t>& triangles,
   return report;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

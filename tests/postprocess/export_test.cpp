@@ -18,20 +18,20 @@
 #include <vector>
 
 #include "sinew/common/error.hpp"
-#include "sinew/simulator/export/contact_sheet.hpp"
-#include "sinew/simulator/export/gltf_writer.hpp"
-#include "sinew/simulator/export/pc2_writer.hpp"
-#include "sinew/simulator/export/png_writer.hpp"
-#include "sinew/simulator/export/rasterizer.hpp"
-#include "sinew/simulator/export/render_session.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/contact_sheet.hpp"
+#include "sinew/postprocess/gltf_writer.hpp"
+#include "sinew/postprocess/pc2_writer.hpp"
+#include "sinew/postprocess/png_writer.hpp"
+#include "sinew/postprocess/rasterizer.hpp"
+#include "sinew/postprocess/render_session.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 #include "sinew/simulator/hdf5_io.hpp"
 #include "sinew/simulator/results_writer.hpp"
 #include "test_meshes.hpp"
 
 namespace {
 
-using namespace sinew::simulator::visual;
+using namespace sinew::postprocess;
 namespace fs = std::filesystem;
 namespace h5 = sinew::simulator::h5;
 
@@ -261,7 +261,7 @@ TEST(ExportRasterizer, MatchesTheStoredReferenceImage) {
   const Image img = render(scene.positions, scene.triangles, o);
   const auto out_dir = temp_dir("reference");
   write_png((out_dir / "actual.png").string(), img);
-  const auto ref_path = fs::path(SINEW_SOURCE_DIR) / "tests/simulator/data/export_reference.png";
+  const auto ref_path = fs::path(SINEW_SOURCE_DIR) / "tests/postprocess/data/export_reference.png";
   ASSERT_TRUE(fs::exists(ref_path))
       << "missing " << ref_path << "; this run's image is in " << out_dir.string();
   const Image ref = read_png(ref_path.string());

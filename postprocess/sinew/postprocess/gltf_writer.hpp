@@ -17,10 +17,10 @@
 // glTF is +Y up, metres: with up = z the coordinates are turned (x, y, z) → (x, z, −y).
 #include <string>
 
-#include "sinew/simulator/export/rasterizer.hpp"
-#include "sinew/simulator/export/results_reader.hpp"
+#include "sinew/postprocess/rasterizer.hpp"
+#include "sinew/postprocess/results_reader.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 struct GltfOptions {
   UpAxis up = UpAxis::y;    // the results' up axis
@@ -33,4 +33,4 @@ struct GltfOptions {
 void write_glb(const std::string& path, const SurfaceAnimation& animation,
                const GltfOptions& options = {});
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -1,10 +1,10 @@
-#include "sinew/simulator/export/contact_sheet.hpp"
+#include "sinew/postprocess/contact_sheet.hpp"
 
 #include <algorithm>
 
 #include "sinew/common/error.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 
 int contact_sheet_label_height(const ContactSheetOptions& o) {
   return text_height(o.font_scale) + o.padding;
@@ -39,4 +39,4 @@ Image contact_sheet(const std::vector<Image>& frames, const std::vector<std::str
   return sheet;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -1,14 +1,15 @@
-#include "sinew/simulator/export/png_writer.hpp"
+#include "sinew/postprocess/png_writer.hpp"
 
 #include <png.h>
 
 #include <cstdio>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "sinew/common/error.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 struct FileCloser {
@@ -27,6 +28,39 @@ struct Context {
   png_longjmp(png, 1);
 }
 void on_warning(png_structp, png_const_charp) {}
+
+// A libpng read or write struct with its info struct and the context its errors go to, destroyed
+// together. Throws IoError naming `path` when libpng runs out of memory.
+struct PngStructs {
+  enum class Mode { read, write };
+  PngStructs(Mode m, const std::string& path) : mode(m) {
+    png = mode == Mode::write
+              ? png_create_write_struct(PNG_LIBPNG_VER_STRING, &ctx, on_error, on_warning)
+              : png_create_read_struct(PNG_LIBPNG_VER_STRING, &ctx, on_error, on_warning);
+    if (png) info = png_create_info_struct(png);
+    if (!info) {
+      destroy();
+      throw IoError(path, "", "libpng: out of memory");
+    }
+  }
+  ~PngStructs() { destroy(); }
+  PngStructs(const PngStructs&) = delete;
+  PngStructs& operator=(const PngStructs&) = delete;
+
+  void destroy() {
+    if (!png) return;
+    if (mode == Mode::write) {
+      png_destroy_write_struct(&png, &info);
+    } else {
+      png_destroy_read_struct(&png, &info, nullptr);
+    }
+  }
+
+  const Mode mode;
+  Context ctx;
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+};
 
 bool write_all(png_structp png, png_infop info, std::FILE* f, const Image* image) {
   if (setjmp(png_jmpbuf(png))) return false;
@@ -76,18 +110,9 @@ bool read_rows(png_structp png, png_bytepp rows) {
 void write_png(const std::string& path, const Image& image) {
   File f(std::fopen(path.c_str(), "wb"));
   if (!f) throw IoError(path, "", "cannot open for writing");
-  Context ctx;
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &ctx, on_error, on_warning);
-  if (!png) throw IoError(path, "", "libpng: out of memory");
-  png_infop info = png_create_info_struct(png);
-  struct Guard {
-    png_structp* p;
-    png_infop* i;
-    ~Guard() { png_destroy_write_struct(p, i); }
-  } guard{&png, &info};
-  if (!info) throw IoError(path, "", "libpng: out of memory");
-  if (!write_all(png, info, f.get(), &image)) {
-    throw IoError(path, "", std::string("cannot write the PNG: ") + ctx.message);
+  PngStructs p(PngStructs::Mode::write, path);
+  if (!write_all(p.png, p.info, f.get(), &image)) {
+    throw IoError(path, "", std::string("cannot write the PNG: ") + p.ctx.message);
   }
   if (std::fflush(f.get()) != 0) throw IoError(path, "", "cannot write (disk full?)");
 }
@@ -99,20 +124,11 @@ Image read_png(const std::string& path) {
   if (std::fread(sig, 1, 8, f.get()) != 8 || png_sig_cmp(sig, 0, 8) != 0) {
     throw FormatError(path, "", "not a PNG file");
   }
-  Context ctx;
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &ctx, on_error, on_warning);
-  if (!png) throw IoError(path, "", "libpng: out of memory");
-  png_infop info = png_create_info_struct(png);
-  struct Guard {
-    png_structp* p;
-    png_infop* i;
-    ~Guard() { png_destroy_read_struct(p, i, nullptr); }
-  } guard{&png, &info};
-  if (!info) throw IoError(path, "", "libpng: out of memory");
+  PngStructs p(PngStructs::Mode::read, path);
   png_uint_32 w = 0, h = 0;
   std::size_t rowbytes = 0;
-  if (!read_header(png, info, f.get(), &w, &h, &rowbytes)) {
-    throw FormatError(path, "", std::string("unreadable PNG: ") + ctx.message);
+  if (!read_header(p.png, p.info, f.get(), &w, &h, &rowbytes)) {
+    throw FormatError(path, "", std::string("unreadable PNG: ") + p.ctx.message);
   }
   if (rowbytes != static_cast<std::size_t>(w) * 3 || w == 0 || h == 0 || w > 65536 || h > 65536) {
     throw FormatError(path, "", "unsupported PNG layout");
@@ -122,10 +138,10 @@ Image read_png(const std::string& path) {
   for (png_uint_32 y = 0; y < h; ++y) {
     rows[y] = img.pixels.data() + static_cast<std::size_t>(y) * w * 3;
   }
-  if (!read_rows(png, rows.data())) {
-    throw FormatError(path, "", std::string("unreadable PNG: ") + ctx.message);
+  if (!read_rows(p.png, rows.data())) {
+    throw FormatError(path, "", std::string("unreadable PNG: ") + p.ctx.message);
   }
   return img;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess

@@ -1,4 +1,4 @@
-#include "sinew/simulator/export/rasterizer.hpp"
+#include "sinew/postprocess/rasterizer.hpp"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 
 #include "sinew/common/error.hpp"
 
-namespace sinew::simulator::visual {
+namespace sinew::postprocess {
 namespace {
 
 Point sub(const Point& a, const Point& b) {
@@ -350,4 +350,4 @@ Image render(const std::vector<float>& positions, const std::vector<std::int32_t
   return img;
 }
 
-}  // namespace sinew::simulator::visual
+}  // namespace sinew::postprocess
