@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/simulator/export/contact_sheet.hpp"
 #include "sinew/simulator/export/png_writer.hpp"
 #include "sinew/simulator/export/render_session.hpp"
@@ -126,7 +127,8 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
 
-  try {
+  const sinew::tool::ExitCodes codes{.config = sinew::tool::kExitUsage};
+  return sinew::tool::run("sinew-render", codes, [&] {
     if (output.empty() && sequence.empty() && sheet.empty() && gif.empty() && mp4.empty()) {
       throw ConfigError("", "command line",
                         "nothing to draw: give -o, --sequence, --contact-sheet, --gif or --mp4");
@@ -222,15 +224,6 @@ int main(int argc, char** argv) {
       if (rc != 0) throw IoError(*target, "", "the encoder failed: " + cmd);
       std::printf("wrote %s\n", target->c_str());
     }
-  } catch (const sinew::ConfigError& e) {
-    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
-    return 2;
-  } catch (const sinew::Error& e) {
-    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
-    return 1;
-  } catch (const std::filesystem::filesystem_error& e) {
-    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+    return sinew::tool::kExitOk;
+  });
 }
