@@ -38,6 +38,7 @@
 #include "accuracy_study_measures.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/math.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/engine.hpp"
@@ -854,13 +855,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const Error& e) {
-    std::fprintf(stderr, "accuracy_study: %s\n", e.what());
-    return 1;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "accuracy_study: %s\n", e.what());
-    return 1;
-  }
+  return sinew::tool::run("accuracy_study", [&] { return run(argc, argv); });
 }

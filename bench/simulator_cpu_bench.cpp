@@ -25,14 +25,7 @@ using namespace sinew::simulator;
 namespace {
 
 formats::Material tissue(double mu, double nu, double rho, const char* name) {
-  formats::Material m;
-  m.name = name;
-  m.youngs_modulus = 2 * mu * (1 + nu);
-  m.poisson_ratio = nu;
-  m.shear_modulus = mu;
-  m.bulk_modulus = m.youngs_modulus / (3 * (1 - 2 * nu));
-  m.density = rho;
-  return m;
+  return formats::make_neo_hookean_material(name, 2 * mu * (1 + nu), nu, rho);
 }
 
 // A skull-like sliding surface under the block: the height field

@@ -2,7 +2,6 @@
 //   sinew-generate box --dims 8 8 8 --voxel-size 0.001 --material soft:3000:0.49:1000 -o box.h5
 // Layers along z: repeat --material (bottom first) and give --layer-boundary heights in metres.
 // A muscle: --muscle NAME:MATERIAL --muscle-box I0 J0 K0 I1 J1 K1 --fibre FX FY FZ.
-#include <cstdio>
 #include <exception>
 #include <sstream>
 #include <string>
@@ -12,6 +11,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model_file.hpp"
@@ -99,11 +99,11 @@ int main(int argc, char** argv) {
                   "creation time recorded in the provenance (default: now, ISO 8601 UTC); fix it "
                   "for reproducible, byte-identical files");
   box->add_option("-o,--output", output, "model file to write (.h5)")->required();
-  box->add_flag("-q,--quiet", quiet, "no log output");
+  box->add_flag("-q,--quiet", quiet, "log only errors");
   CLI11_PARSE(app, argc, argv);
 
-  try {
-    if (quiet) sinew::log::set_level(sinew::log::Level::off);
+  return sinew::tool::run("sinew-generate", [&] {
+    if (quiet) sinew::log::set_level(sinew::log::Level::error);
     spec.dims = {dims[0], dims[1], dims[2]};
     spec.origin = {origin[0], origin[1], origin[2]};
     for (const auto& m : materials) spec.materials.push_back(parse_material(m));
@@ -134,11 +134,6 @@ int main(int argc, char** argv) {
     sinew::log::info("wrote {}: {} nodes, {} elements, {} materials, {} muscles", output,
                      model.node_count(), model.element_count(), model.materials.size(),
                      model.muscles.size());
-    return 0;
-  } catch (const sinew::Error& e) {
-    std::fprintf(stderr, "sinew-generate: %s\n", e.what());
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "sinew-generate: error: %s\n", e.what());
-  }
-  return 1;
+    return sinew::tool::kExitOk;
+  });
 }

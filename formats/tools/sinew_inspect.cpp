@@ -1,12 +1,11 @@
 // sinew-inspect MODEL [--json]: validates a model file and prints its summary (text or JSON).
 // Exit status 0 for a valid file, 1 (with the error on stderr) for an invalid or unreadable one.
 #include <cstdio>
-#include <exception>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
-#include "sinew/common/error.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/formats/summary.hpp"
@@ -21,18 +20,13 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("sinew-inspect ") + sinew::kVersion);
   CLI11_PARSE(app, argc, argv);
 
-  try {
+  return sinew::tool::run("sinew-inspect", [&] {
     const auto model = sinew::formats::read_model(path);
     const auto summary = sinew::formats::summarize(model);
     const std::string text =
         json ? sinew::formats::summary_json(summary) + "\n"
              : "file: " + path + " (valid)\n" + sinew::formats::summary_text(summary);
     std::fputs(text.c_str(), stdout);
-    return 0;
-  } catch (const sinew::Error& e) {
-    std::fprintf(stderr, "sinew-inspect: invalid model: %s\n", e.what());
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "sinew-inspect: error: %s\n", e.what());
-  }
-  return 1;
+    return sinew::tool::kExitOk;
+  });
 }

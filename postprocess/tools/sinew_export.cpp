@@ -13,6 +13,7 @@
 
 #include "results_options.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/postprocess/gltf_writer.hpp"
 #include "sinew/postprocess/pc2_writer.hpp"
 #include "sinew/postprocess/results_reader.hpp"
@@ -44,10 +45,11 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
 
-  try {
+  const tool::ExitCodes codes{.config = tool::kExitUsage};
+  return tool::run("sinew-export", codes, [&] {
     if (list) {
       for (const auto& name : list_surfaces(results)) std::printf("%s\n", name.c_str());
-      return 0;
+      return tool::kExitOk;
     }
     if (glb.empty() && pc2.empty() && obj_dir.empty()) {
       throw ConfigError("", "command line",
@@ -82,12 +84,6 @@ int main(int argc, char** argv) {
       const auto paths = write_obj_sequence(obj_dir, anim);
       std::printf("wrote %zu OBJ files into %s\n", paths.size(), obj_dir.c_str());
     }
-  } catch (const sinew::ConfigError& e) {
-    std::fprintf(stderr, "sinew-export: error: %s\n", e.what());
-    return 2;
-  } catch (const sinew::Error& e) {
-    std::fprintf(stderr, "sinew-export: error: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+    return tool::kExitOk;
+  });
 }

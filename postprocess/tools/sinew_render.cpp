@@ -21,6 +21,7 @@
 
 #include "results_options.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/postprocess/contact_sheet.hpp"
 #include "sinew/postprocess/png_writer.hpp"
 #include "sinew/postprocess/render_session.hpp"
@@ -122,7 +123,8 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
 
-  try {
+  const sinew::tool::ExitCodes codes{.config = sinew::tool::kExitUsage};
+  return sinew::tool::run("sinew-render", codes, [&] {
     if (output.empty() && sequence.empty() && sheet.empty() && gif.empty() && mp4.empty()) {
       throw ConfigError("", "command line",
                         "nothing to draw: give -o, --sequence, --contact-sheet, --gif or --mp4");
@@ -218,15 +220,6 @@ int main(int argc, char** argv) {
       if (rc != 0) throw IoError(*target, "", "the encoder failed: " + cmd);
       std::printf("wrote %s\n", target->c_str());
     }
-  } catch (const sinew::ConfigError& e) {
-    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
-    return 2;
-  } catch (const sinew::Error& e) {
-    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
-    return 1;
-  } catch (const std::filesystem::filesystem_error& e) {
-    std::fprintf(stderr, "sinew-render: error: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+    return sinew::tool::kExitOk;
+  });
 }

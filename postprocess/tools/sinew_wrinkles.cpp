@@ -25,9 +25,10 @@
 #include "results_options.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/tool.hpp"
+#include "sinew/formats/hdf5_file.hpp"
 #include "sinew/postprocess/results_reader.hpp"
 #include "sinew/postprocess/wrinkles.hpp"
-#include "sinew/simulator/hdf5_io.hpp"
 
 namespace {
 
@@ -57,8 +58,7 @@ struct Lattice {
   std::array<double, 3> origin{0, 0, 0};
 };
 Lattice voxel_lattice(const std::string& path) {
-  namespace h5 = sinew::simulator::h5;
-  h5::quiet_errors();
+  namespace h5 = sinew::formats::hdf5;
   auto file = h5::open_file(path, false);
   Lattice l;
   if (!h5::exists(file, "mesh") || !h5::exists(file, "/mesh/connectivity") ||
@@ -166,7 +166,8 @@ int main(int argc, char** argv) {
   }
   if (quiet) log::set_level(log::Level::error);
 
-  try {
+  const tool::ExitCodes codes{.config = tool::kExitUsage};
+  return tool::run("sinew-wrinkles", codes, [&] {
     WrinkleOptions o;
     o.up = parse_axis(up, "--up");
     o.across = parse_axis(across, "--across");
@@ -378,12 +379,6 @@ int main(int argc, char** argv) {
       if (!out) throw IoError(trace, "", "write failed");
       if (!quiet) std::printf("wrote %s\n", trace.c_str());
     }
-  } catch (const sinew::ConfigError& e) {
-    std::fprintf(stderr, "sinew-wrinkles: error: %s\n", e.what());
-    return 2;
-  } catch (const sinew::Error& e) {
-    std::fprintf(stderr, "sinew-wrinkles: error: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+    return tool::kExitOk;
+  });
 }

@@ -16,6 +16,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/simulator/benchmark_models.hpp"
@@ -86,15 +87,15 @@ int main(int argc, char** argv) {
       ->default_val(scale);
   body->add_option("--voxel-size", body_h, "voxel side h, m")->default_val(body_h);
   body->add_option("-o,--output", output, "model file to write (.h5)")->required();
-  body->add_flag("-q,--quiet", quiet, "no log output");
+  body->add_flag("-q,--quiet", quiet, "log only errors");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
 
-  try {
-    if (quiet) sinew::log::set_level(sinew::log::Level::off);
+  return sinew::tool::run("sinew-sample-model", [&] {
+    if (quiet) sinew::log::set_level(sinew::log::Level::error);
     sinew::formats::Model model;
     if (block->parsed()) {
       for (int d : dims)
@@ -128,11 +129,6 @@ int main(int argc, char** argv) {
         output, model.node_count(), model.element_count(), model.materials.size(),
         sinew::simulator::model_mass(model), skin.name, skin.vertices.size(),
         skin.triangles.size());
-    return 0;
-  } catch (const sinew::Error& e) {
-    std::fprintf(stderr, "sinew-sample-model: %s\n", e.what());
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "sinew-sample-model: error: %s\n", e.what());
-  }
-  return 1;
+    return sinew::tool::kExitOk;
+  });
 }

@@ -8,17 +8,46 @@
 // Exit status: 0 done (or plan printed), 1 bad input or I/O error, 2 bad command line,
 // 3 the simulation became unstable (frames written so far stay valid), 130 interrupted (a
 // checkpoint was written; resume with --restart).
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
-#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <string>
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/simulator/runner.hpp"
+
+namespace {
+
+// Runs the scene and returns the exit status; errors other than instability escape to tool::run.
+int simulate(const sinew::simulator::RunOptions& opt) {
+  using namespace sinew;
+  try {
+    const auto result = simulator::run_scene(opt);
+    if (!result.ran) return tool::kExitOk;
+    const auto& s = result.summary;
+    if (s.status == "interrupted") {
+      tool::report_error("sinew-simulate", s.message);
+      return tool::kExitInterrupted;
+    }
+    log::info("done: {} steps of {:.6g} s, {} frames, {:.3g} s wall ({:.3g} ms/step) -> {}",
+              s.steps_done, s.dt, s.frames, s.wall_time_s, 1e3 * s.time_per_step_s,
+              result.output_dir);
+    return tool::kExitOk;
+  } catch (const InstabilityError& e) {
+    // The one error with its own status and a hint: the frames written so far are usable.
+    tool::report_error("sinew-simulate",
+                       fmt::format("unstable: {}\n(the frames written so far in {} are valid)",
+                                   e.what(), opt.output_dir));
+    return tool::kExitUnstable;
+  }
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace sinew;
@@ -67,28 +96,5 @@ int main(int argc, char** argv) {
   opt.output_dir =
       !output.empty() ? output : std::filesystem::path(opt.scene_path).stem().string() + "_results";
   simulator::install_interrupt_handlers();
-  try {
-    const auto result = simulator::run_scene(opt);
-    if (!result.ran) return 0;
-    const auto& s = result.summary;
-    if (s.status == "interrupted") {
-      std::fprintf(stderr, "sinew-simulate: %s\n", s.message.c_str());
-      return 130;
-    }
-    log::info("done: {} steps of {:.6g} s, {} frames, {:.3g} s wall ({:.3g} ms/step) -> {}",
-              s.steps_done, s.dt, s.frames, s.wall_time_s, 1e3 * s.time_per_step_s,
-              result.output_dir);
-    return 0;
-  } catch (const InstabilityError& e) {
-    std::fprintf(stderr,
-                 "sinew-simulate: unstable: %s\n(the frames written so far in %s are valid)\n",
-                 e.what(), opt.output_dir.c_str());
-    return 3;
-  } catch (const Error& e) {
-    std::fprintf(stderr, "sinew-simulate: error: %s\n", e.what());
-    return 1;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "sinew-simulate: internal error: %s\n", e.what());
-    return 1;
-  }
+  return tool::run("sinew-simulate", [&] { return simulate(opt); });
 }

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "sinew/common/error.hpp"
+#include "sinew/formats/hdf5_file.hpp"
 #include "sinew/postprocess/contact_sheet.hpp"
 #include "sinew/postprocess/gltf_writer.hpp"
 #include "sinew/postprocess/pc2_writer.hpp"
@@ -25,7 +26,6 @@
 #include "sinew/postprocess/rasterizer.hpp"
 #include "sinew/postprocess/render_session.hpp"
 #include "sinew/postprocess/results_reader.hpp"
-#include "sinew/simulator/hdf5_io.hpp"
 #include "sinew/simulator/results_writer.hpp"
 #include "test_meshes.hpp"
 
@@ -33,7 +33,7 @@ namespace {
 
 using namespace sinew::postprocess;
 namespace fs = std::filesystem;
-namespace h5 = sinew::simulator::h5;
+namespace h5 = sinew::formats::hdf5;
 
 struct Mesh {
   std::vector<float> positions;

@@ -18,16 +18,16 @@
 #include <vector>
 
 #include "sinew/common/error.hpp"
+#include "sinew/formats/hdf5_file.hpp"
 #include "sinew/postprocess/results_reader.hpp"
 #include "sinew/postprocess/wrinkles.hpp"
-#include "sinew/simulator/hdf5_io.hpp"
 #include "sinew/simulator/results_writer.hpp"
 
 namespace {
 
 using namespace sinew::postprocess;
 namespace fs = std::filesystem;
-namespace h5 = sinew::simulator::h5;
+namespace h5 = sinew::formats::hdf5;
 constexpr double kPi = std::numbers::pi;
 
 // A sheet curved both ways: across x a parabola of radius Rx, along y a circle of radius R about

@@ -8,12 +8,12 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
-#include <iostream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/voxelizer/forehead.hpp"
 
 namespace {
@@ -96,12 +96,12 @@ int main(int argc, char** argv) {
   app.add_flag("--list", list, "print every parameter with its value and exit");
   CLI11_PARSE(app, argc, argv);
 
-  try {
+  return sinew::tool::run("sinew-forehead", [&] {
     ForeheadParams p;
     for (const auto& s : settings) apply_setting(p, s);
     if (list) {
       for (auto& [n, ptr] : parameter_table(p)) std::printf("%-22s %g\n", n.c_str(), *ptr);
-      return 0;
+      return sinew::tool::kExitOk;
     }
     if (dir.empty()) throw sinew::ConfigError("", "-o", "give the output folder: -o DIR");
     const auto written = sinew::voxelizer::write_forehead(p, dir);
@@ -122,12 +122,6 @@ int main(int argc, char** argv) {
       std::printf("  %-40s %7zu vertices %7zu triangles\n", written[k].string().c_str(),
                   all[k]->vertices.size(), all[k]->triangles.size());
     }
-    return 0;
-  } catch (const sinew::Error& e) {
-    std::cerr << "sinew-forehead: error: " << e.what() << '\n';
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "sinew-forehead: error: " << e.what() << '\n';
-    return 1;
-  }
+    return sinew::tool::kExitOk;
+  });
 }

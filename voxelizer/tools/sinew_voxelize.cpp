@@ -3,12 +3,11 @@
 // summary (or, with --json, the same as JSON on stdout). Any error: a message on stderr, exit
 // code 1 (2 for command-line errors), and no model file.
 #include <CLI/CLI.hpp>
-#include <cstdio>
-#include <exception>
 #include <iostream>
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/tool.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/voxelizer/spec.hpp"
 #include "sinew/voxelizer/voxelize.hpp"
@@ -26,7 +25,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   sinew::log::set_level(quiet ? sinew::log::Level::error : sinew::log::Level::info);
-  try {
+  return sinew::tool::run("sinew-voxelize", [&] {
     auto spec = sinew::voxelizer::read_spec(spec_path);
     if (!output.empty()) spec.output = output;
     if (spec.output.empty()) {
@@ -44,12 +43,6 @@ int main(int argc, char** argv) {
     } else if (!quiet) {
       std::cout << sinew::voxelizer::summary_text(result.summary);
     }
-    return 0;
-  } catch (const sinew::Error& e) {
-    std::cerr << "sinew-voxelize: error: " << e.what() << '\n';
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "sinew-voxelize: error: " << e.what() << '\n';
-    return 1;
-  }
+    return sinew::tool::kExitOk;
+  });
 }

@@ -1,22 +1,57 @@
 #include "sinew/formats/model.hpp"
 
 #include <algorithm>
-#include <stdexcept>
+#include <initializer_list>
 #include <string>
 #include <utility>
 
+#include "sinew/common/error.hpp"
+
 namespace sinew::formats {
 
-const char* to_string(MaterialLaw law) {
-  switch (law) {
-    case MaterialLaw::neo_hookean_tled: return "neo_hookean_tled";
-  }
+namespace {
+
+// The string names of an enumeration, in the order the "known:" list of errors shows them.
+template <typename Enum>
+using NameTable = std::initializer_list<std::pair<Enum, const char*>>;
+
+const NameTable<MaterialLaw> kLawNames = {{MaterialLaw::neo_hookean_tled, "neo_hookean_tled"}};
+const NameTable<ForceLengthCurve> kCurveNames = {{ForceLengthCurve::blemker2005, "blemker2005"}};
+const NameTable<SurfaceRole> kRoleNames = {{SurfaceRole::sliding, "sliding"},
+                                           {SurfaceRole::visual, "visual"}};
+
+template <typename Enum>
+const char* name_of(const NameTable<Enum>& names, Enum value) {
+  for (const auto& [v, name] : names)
+    if (v == value) return name;
   return "?";
 }
 
+// FormatError without file or field: the names come from a model file or a spec, and the caller
+// (model_file.cpp, the voxelizer) knows which and adds them.
+template <typename Enum>
+Enum parse_name(const NameTable<Enum>& names, const std::string& name, const char* what) {
+  std::string known;
+  for (const auto& [v, n] : names) {
+    if (name == n) return v;
+    known.append(known.empty() ? "" : ", ").append(n);
+  }
+  throw FormatError("", "",
+                    std::string("unknown ") + what + " '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace
+
+const char* to_string(MaterialLaw law) {
+  return name_of(kLawNames, law);
+}
 MaterialLaw material_law_from_string(const std::string& name) {
-  if (name == "neo_hookean_tled") return MaterialLaw::neo_hookean_tled;
-  throw std::invalid_argument("unknown constitutive law '" + name + "' (known: neo_hookean_tled)");
+  return parse_name(kLawNames, name, "constitutive law");
+}
+
+ShearAndBulkModulus shear_and_bulk_modulus(double youngs_modulus, double poisson_ratio) {
+  return {youngs_modulus / (2.0 * (1.0 + poisson_ratio)),
+          youngs_modulus / (3.0 * (1.0 - 2.0 * poisson_ratio))};
 }
 
 Material make_neo_hookean_material(std::string name, double youngs_modulus, double poisson_ratio,
@@ -26,36 +61,25 @@ Material make_neo_hookean_material(std::string name, double youngs_modulus, doub
   m.law = MaterialLaw::neo_hookean_tled;
   m.youngs_modulus = youngs_modulus;
   m.poisson_ratio = poisson_ratio;
-  m.shear_modulus = youngs_modulus / (2.0 * (1.0 + poisson_ratio));
-  m.bulk_modulus = youngs_modulus / (3.0 * (1.0 - 2.0 * poisson_ratio));
+  const auto moduli = shear_and_bulk_modulus(youngs_modulus, poisson_ratio);
+  m.shear_modulus = moduli.shear_modulus;
+  m.bulk_modulus = moduli.bulk_modulus;
   m.density = density;
   return m;
 }
 
 const char* to_string(ForceLengthCurve curve) {
-  switch (curve) {
-    case ForceLengthCurve::blemker2005: return "blemker2005";
-  }
-  return "?";
+  return name_of(kCurveNames, curve);
 }
-
 ForceLengthCurve force_length_curve_from_string(const std::string& name) {
-  if (name == "blemker2005") return ForceLengthCurve::blemker2005;
-  throw std::invalid_argument("unknown force-length curve '" + name + "' (known: blemker2005)");
+  return parse_name(kCurveNames, name, "force-length curve");
 }
 
 const char* to_string(SurfaceRole role) {
-  switch (role) {
-    case SurfaceRole::sliding: return "sliding";
-    case SurfaceRole::visual: return "visual";
-  }
-  return "?";
+  return name_of(kRoleNames, role);
 }
-
 SurfaceRole surface_role_from_string(const std::string& name) {
-  if (name == "sliding") return SurfaceRole::sliding;
-  if (name == "visual") return SurfaceRole::visual;
-  throw std::invalid_argument("unknown surface role '" + name + "' (known: sliding, visual)");
+  return parse_name(kRoleNames, name, "surface role");
 }
 
 bool lattice_less(const Lattice& a, const Lattice& b) {
@@ -68,8 +92,9 @@ void build_lattice_topology(Model& model) {
   const auto& elements = model.element_lattice;
   for (std::size_t e = 1; e < elements.size(); ++e) {
     if (!lattice_less(elements[e - 1], elements[e])) {
-      throw std::invalid_argument("element lattice is not sorted (k, j, i) and unique at element " +
-                                  std::to_string(e));
+      throw FormatError(
+          "", "",
+          "element lattice is not sorted (k, j, i) and unique at element " + std::to_string(e));
     }
   }
   std::vector<Lattice> nodes;

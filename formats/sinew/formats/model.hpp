@@ -44,7 +44,7 @@ struct VoxelGrid {
 // Constitutive laws the format can name. Stored in the file as its string name.
 enum class MaterialLaw { neo_hookean_tled };
 const char* to_string(MaterialLaw law);
-// Throws std::invalid_argument for unknown names.
+// Throws FormatError (no file or field: callers add them) for unknown names.
 MaterialLaw material_law_from_string(const std::string& name);
 
 struct Material {
@@ -58,8 +58,21 @@ struct Material {
   bool operator==(const Material&) const = default;
 };
 
-// A TLED neo-Hookean material from E (Pa), ν and ρ (kg/m³), with μ = E / (2(1+ν)) and
-// κ = E / (3(1−2ν)) filled in the way the validator checks them.
+// The shear modulus μ and bulk modulus κ (both Pa) of an isotropic elastic material from Young's
+// modulus E (Pa) and Poisson's ratio ν (1):
+//   μ = E / (2(1+ν)),   κ = E / (3(1−2ν)).
+// Finite and positive for E > 0 and ν in (−1, 0.5). Source: the standard conversion formulae for
+// isotropic linear elasticity, e.g. A. F. Bower, Applied Mechanics of Solids (CRC Press, 2009),
+// §3.2.3. The one place sinew computes them: the voxelizer, make_neo_hookean_material() and the
+// validator's consistency check all call it.
+struct ShearAndBulkModulus {
+  double shear_modulus = 0;  // Pa, μ
+  double bulk_modulus = 0;   // Pa, κ
+};
+ShearAndBulkModulus shear_and_bulk_modulus(double youngs_modulus, double poisson_ratio);
+
+// A TLED neo-Hookean material from E (Pa), ν and ρ (kg/m³), with μ and κ from
+// shear_and_bulk_modulus(), as the validator checks them.
 Material make_neo_hookean_material(std::string name, double youngs_modulus, double poisson_ratio,
                                    double density);
 
@@ -168,7 +181,7 @@ bool lattice_less(const Lattice& a, const Lattice& b);
 
 // Fills node_lattice (every corner of every element, sorted lexicographically by k, j, i) and
 // element_nodes from element_lattice, which must already be sorted the same way and unique
-// (throws std::invalid_argument otherwise). Used by the voxelizer and by generators; the validator
+// (throws FormatError otherwise). Used by the voxelizer and by generators; the validator
 // checks the same invariants on files.
 void build_lattice_topology(Model& model);
 

@@ -1,22 +1,18 @@
 #include "sinew/formats/model_file.hpp"
 
-#include <hdf5.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
-#include <fstream>
-#include <limits>
-#include <new>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
+#include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/validate.hpp"
 
 namespace sinew::formats {
@@ -28,148 +24,29 @@ static_assert(sizeof(std::array<Index, 3>) == 3 * sizeof(Index), "triangles must
 
 namespace {
 
-// HDF5 reports failures on its error stack; we turn them into our exceptions instead of printing.
-void silence_hdf5() {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-}
-
-herr_t collect_error(unsigned n, const H5E_error2_t* err, void* data) {
-  auto* out = static_cast<std::string*>(data);
-  (void)n;
-  if (err->desc && *err->desc) *out = err->desc;  // walking downward: keep the innermost
-  return 0;
-}
-
-// The innermost message of HDF5's current error stack ("" when empty), clearing the stack.
-std::string hdf5_detail() {
-  std::string detail;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collect_error, &detail);
-  H5Eclear2(H5E_DEFAULT);
-  return detail.empty() ? std::string() : " (HDF5: " + detail + ")";
-}
-
-// Owns one HDF5 identifier and closes it with the matching function.
-class Handle {
- public:
-  using Closer = herr_t (*)(hid_t);
-  Handle() = default;
-  Handle(hid_t id, Closer closer) : id_(id), closer_(closer) {}
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-  Handle(Handle&& o) noexcept : id_(o.id_), closer_(o.closer_) { o.id_ = -1; }
-  Handle& operator=(Handle&& o) noexcept {
-    if (this != &o) {
-      reset();
-      id_ = o.id_;
-      closer_ = o.closer_;
-      o.id_ = -1;
-    }
-    return *this;
-  }
-  ~Handle() { reset(); }
-  void reset() {
-    if (id_ >= 0 && closer_) closer_(id_);
-    id_ = -1;
-  }
-  // Closes now and reports whether closing worked (needed for the file, where close flushes).
-  bool close() {
-    const herr_t status = id_ >= 0 && closer_ ? closer_(id_) : 0;
-    id_ = -1;
-    return status >= 0;
-  }
-  hid_t get() const { return id_; }
-  bool valid() const { return id_ >= 0; }
-
- private:
-  hid_t id_ = -1;
-  Closer closer_ = nullptr;
-};
-
-Handle string_type() {
-  Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
-  H5Tset_size(t.get(), H5T_VARIABLE);
-  H5Tset_cset(t.get(), H5T_CSET_UTF8);
-  return t;
-}
-
-template <typename T>
-hid_t native_type();
-template <>
-hid_t native_type<std::int32_t>() {
-  return H5T_NATIVE_INT32;
-}
-template <>
-hid_t native_type<std::int64_t>() {
-  return H5T_NATIVE_INT64;
-}
-template <>
-hid_t native_type<double>() {
-  return H5T_NATIVE_DOUBLE;
-}
-
-template <typename T>
-hid_t file_type();
-template <>
-hid_t file_type<std::int32_t>() {
-  return H5T_STD_I32LE;
-}
-template <>
-hid_t file_type<std::int64_t>() {
-  return H5T_STD_I64LE;
-}
-template <>
-hid_t file_type<double>() {
-  return H5T_IEEE_F64LE;
-}
-
 // ------------------------------------------------------------------------------------------------
-// Writer
+// Writer: the model's datasets, dataset by dataset, through the HDF5 layer (hdf5_file.hpp). Errors
+// name `display` (the final path), not the temporary file written.
 
 class Writer {
  public:
-  Writer(const std::string& path, const std::string& display) : display_(display) {
-    Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
-    H5Pset_obj_track_times(fcpl.get(), false);  // root group: no time stamps
-    file_ = Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), H5P_DEFAULT), H5Fclose);
-    if (!file_.valid()) fail("", "cannot create the file" + hdf5_detail());
-    dcpl_ = Handle(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
-    H5Pset_obj_track_times(dcpl_.get(), false);
-    gcpl_ = Handle(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
-    H5Pset_obj_track_times(gcpl_.get(), false);
-    ordered_gcpl_ = Handle(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
-    H5Pset_obj_track_times(ordered_gcpl_.get(), false);
-    H5Pset_link_creation_order(ordered_gcpl_.get(), H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED);
-    strtype_ = string_type();
-  }
+  Writer(const std::string& path, const std::string& display)
+      : display_(display), file_(hdf5::create_file(path, display)) {}
 
-  [[noreturn]] void fail(const std::string& dataset, const std::string& problem) const {
-    throw IoError(display_, dataset, problem);
-  }
-
-  void close() {
-    if (!file_.close()) fail("", "cannot close (flush) the file" + hdf5_detail());
-  }
+  void close() { hdf5::close_file(file_, display_); }
 
   // ordered: keep the links in creation order (named sets keep the order of the model).
   void group(const std::string& path, bool ordered = false) {
-    Handle g(H5Gcreate2(file_.get(), path.c_str(), H5P_DEFAULT,
-                        ordered ? ordered_gcpl_.get() : gcpl_.get(), H5P_DEFAULT),
-             H5Gclose);
-    if (!g.valid()) fail(path, "cannot create group" + hdf5_detail());
+    hdf5::create_group(file_, path, display_, ordered);
   }
 
   // rows × cols array (cols == 0: a 1-D array of `rows`; rows < 0: a scalar).
   template <typename T>
   void array(const std::string& path, const T* data, std::int64_t rows, int cols = 0) {
-    Handle space = rows < 0 ? Handle(H5Screate(H5S_SCALAR), H5Sclose) : make_space(rows, cols);
-    Handle ds(H5Dcreate2(file_.get(), path.c_str(), file_type<T>(), space.get(), H5P_DEFAULT,
-                         dcpl_.get(), H5P_DEFAULT),
-              H5Dclose);
-    if (!ds.valid()) fail(path, "cannot create dataset" + hdf5_detail());
-    if (rows != 0 &&
-        H5Dwrite(ds.get(), native_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
-      fail(path, "cannot write dataset" + hdf5_detail());
-    }
+    std::vector<hsize_t> dims;
+    if (rows >= 0) dims.push_back(static_cast<hsize_t>(rows));
+    if (rows >= 0 && cols > 0) dims.push_back(static_cast<hsize_t>(cols));
+    hdf5::write(file_, path, dims, data, display_);
   }
   template <typename T>
   void array(const std::string& path, const std::vector<T>& v) {
@@ -178,55 +55,20 @@ class Writer {
   void scalar(const std::string& path, double v) { array(path, &v, -1); }
 
   void strings(const std::string& path, const std::vector<std::string>& values) {
-    std::vector<const char*> ptrs;
-    ptrs.reserve(values.size());
-    for (const auto& s : values) ptrs.push_back(s.c_str());
-    Handle space = make_space(static_cast<std::int64_t>(values.size()), 0);
-    write_strings(path, space, ptrs);
+    hdf5::write_strings(file_, path, values, display_);
   }
   void string(const std::string& path, const std::string& value) {
-    std::vector<const char*> ptrs{value.c_str()};
-    Handle space(H5Screate(H5S_SCALAR), H5Sclose);
-    write_strings(path, space, ptrs);
+    hdf5::write_string(file_, path, value, display_);
   }
 
   void root_attributes() {
-    Handle scalar_space(H5Screate(H5S_SCALAR), H5Sclose);
-    Handle a(H5Acreate2(file_.get(), "format", strtype_.get(), scalar_space.get(), H5P_DEFAULT,
-                        H5P_DEFAULT),
-             H5Aclose);
-    const char* name = kModelFormatName;
-    if (!a.valid() || H5Awrite(a.get(), strtype_.get(), &name) < 0) {
-      fail("/format", "cannot write attribute" + hdf5_detail());
-    }
-    Handle v(H5Acreate2(file_.get(), "format_version", H5T_STD_I32LE, scalar_space.get(),
-                        H5P_DEFAULT, H5P_DEFAULT),
-             H5Aclose);
-    const std::int32_t version = kModelFormatVersion;
-    if (!v.valid() || H5Awrite(v.get(), H5T_NATIVE_INT32, &version) < 0) {
-      fail("/format_version", "cannot write attribute" + hdf5_detail());
-    }
+    hdf5::set_attribute(file_, "format", kModelFormatName, display_, hdf5::StringKind::variable);
+    hdf5::set_attribute(file_, "format_version", std::int32_t{kModelFormatVersion}, display_);
   }
 
  private:
-  static Handle make_space(std::int64_t rows, int cols) {
-    const hsize_t dims[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(cols)};
-    return Handle(H5Screate_simple(cols > 0 ? 2 : 1, dims, nullptr), H5Sclose);
-  }
-  void write_strings(const std::string& path, const Handle& space,
-                     const std::vector<const char*>& ptrs) {
-    Handle ds(H5Dcreate2(file_.get(), path.c_str(), strtype_.get(), space.get(), H5P_DEFAULT,
-                         dcpl_.get(), H5P_DEFAULT),
-              H5Dclose);
-    if (!ds.valid()) fail(path, "cannot create dataset" + hdf5_detail());
-    if (!ptrs.empty() &&
-        H5Dwrite(ds.get(), strtype_.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0) {
-      fail(path, "cannot write dataset" + hdf5_detail());
-    }
-  }
-
   std::string display_;
-  Handle file_, dcpl_, gcpl_, ordered_gcpl_, strtype_;
+  hdf5::Handle file_;
 };
 
 template <typename Range, typename Get>
@@ -361,17 +203,8 @@ void write_all(Writer& w, const Model& m) {
 // ------------------------------------------------------------------------------------------------
 // Reader
 
-struct Shape {
-  int rank = 0;  // 0: scalar
-  hsize_t dims[2] = {0, 0};
-};
-
-std::string show_shape(const Shape& s) {
-  if (s.rank == 0) return "scalar";
-  if (s.rank == 1) return fmt::format("({})", s.dims[0]);
-  return fmt::format("({}, {})", s.dims[0], s.dims[1]);
-}
-
+// The model file's reads, each a strict read of the HDF5 layer (exact dtype and shape); fail()
+// raises the FormatError of the checks below, naming the file.
 class Reader {
  public:
   explicit Reader(std::string path) : path_(std::move(path)) {}
@@ -384,42 +217,22 @@ class Reader {
     throw FormatError(path_, dataset, problem).at(index);
   }
 
-  void open() {
-    {
-      std::ifstream probe(path_, std::ios::binary);
-      if (!probe) throw IoError(path_, "", std::string("cannot open: ") + std::strerror(errno));
-    }
-    const htri_t is_hdf5 = H5Fis_hdf5(path_.c_str());
-    if (is_hdf5 <= 0) {
-      H5Eclear2(H5E_DEFAULT);
-      fail("", "not an HDF5 file (no HDF5 signature found)");
-    }
-    file_ = Handle(H5Fopen(path_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-    if (!file_.valid()) {
-      fail("", "cannot open as HDF5, the file is truncated or corrupt" + hdf5_detail());
-    }
-  }
+  void open() { file_ = hdf5::open_checked(path_); }
 
   // Checks the root attributes `format` and `format_version`.
   void check_format() {
-    const std::string format = read_string_attribute("format");
+    const auto require = [&](const char* name) {
+      if (!hdf5::has_attribute(file_, name)) {
+        fail(std::string("/") + name, "missing root attribute (not a sinew model file?)");
+      }
+    };
+    require("format");
+    const std::string format = hdf5::string_attribute(file_, "format", path_);
     if (format != kModelFormatName) {
       fail("/format", fmt::format("format is '{}', expected '{}'", format, kModelFormatName));
     }
-    if (H5Aexists(file_.get(), "format_version") <= 0) {
-      H5Eclear2(H5E_DEFAULT);
-      fail("/format_version", "missing root attribute (not a sinew model file?)");
-    }
-    Handle a(H5Aopen(file_.get(), "format_version", H5P_DEFAULT), H5Aclose);
-    Handle t(H5Aget_type(a.get()), H5Tclose);
-    Handle space(H5Aget_space(a.get()), H5Sclose);
-    if (!t.valid() || H5Tget_class(t.get()) != H5T_INTEGER ||
-        H5Sget_simple_extent_npoints(space.get()) != 1) {
-      fail("/format_version", "must be one integer" + hdf5_detail());
-    }
-    std::int32_t version = 0;
-    if (H5Aread(a.get(), H5T_NATIVE_INT32, &version) < 0)
-      fail("/format_version", "cannot read" + hdf5_detail());
+    require("format_version");
+    const std::int64_t version = hdf5::int_attribute(file_, "format_version", path_);
     if (version != kModelFormatVersion) {
       fail("/format_version",
            fmt::format("unsupported format version {} (this build reads version {})", version,
@@ -427,55 +240,10 @@ class Reader {
     }
   }
 
-  // Opens a dataset, checking that it exists, has the expected type class and element size,
-  // and the expected rank and number of columns (cols == 0: 1-D; rank_expected 0: scalar).
-  Handle open_dataset(const std::string& path, H5T_class_t cls, std::size_t size, int rank_expected,
-                      hsize_t cols, Shape& shape, const char* dtype_name) {
-    if (!exists(path)) fail(path, "missing dataset");
-    Handle ds(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), H5Dclose);
-    if (!ds.valid()) fail(path, "cannot open, not a dataset" + hdf5_detail());
-    Handle type(H5Dget_type(ds.get()), H5Tclose);
-    const H5T_class_t got = H5Tget_class(type.get());
-    bool ok = got == cls;
-    if (ok && cls != H5T_STRING) ok = H5Tget_size(type.get()) == size;
-    if (ok && cls == H5T_INTEGER) ok = H5Tget_sign(type.get()) == H5T_SGN_2;
-    if (!ok) fail(path, fmt::format("wrong dtype, expected {}", dtype_name));
-    Handle space(H5Dget_space(ds.get()), H5Sclose);
-    const int rank = H5Sget_simple_extent_ndims(space.get());
-    if (rank < 0 || rank > 2) fail(path, fmt::format("wrong shape, rank {}", rank));
-    shape.rank = rank;
-    H5Sget_simple_extent_dims(space.get(), shape.dims, nullptr);
-    const std::string want = rank_expected == 0   ? "scalar"
-                             : rank_expected == 1 ? "(n)"
-                                                  : fmt::format("(n, {})", cols);
-    if (rank != rank_expected || (rank == 2 && shape.dims[1] != cols)) {
-      fail(path, fmt::format("wrong shape {}, expected {}", show_shape(shape), want));
-    }
-    return ds;
-  }
-
   // 1-D array (cols == 0) or rows × cols array, flattened.
   template <typename T>
   std::vector<T> array(const std::string& path, hsize_t cols = 0) {
-    Shape shape;
-    const H5T_class_t cls = std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER;
-    const char* name = std::is_same_v<T, double> ? "float64" : (sizeof(T) == 8 ? "int64" : "int32");
-    Handle ds = open_dataset(path, cls, sizeof(T), cols == 0 ? 1 : 2, cols, shape, name);
-    if (shape.dims[0] > static_cast<hsize_t>(std::numeric_limits<Index>::max())) {
-      fail(path, fmt::format("{} rows, more than 32-bit ids can address", shape.dims[0]));
-    }
-    const std::size_t count = static_cast<std::size_t>(shape.dims[0]) * (cols == 0 ? 1 : cols);
-    std::vector<T> out;
-    try {
-      out.resize(count);
-    } catch (const std::bad_alloc&) {
-      fail(path, fmt::format("cannot allocate memory for {} values", count));
-    }
-    if (count > 0 &&
-        H5Dread(ds.get(), native_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0) {
-      fail(path, "cannot read" + hdf5_detail());
-    }
-    return out;
+    return hdf5::read_array<T>(file_, path, path_, cols);
   }
   // An array with exactly `n` entries (for the fixed-size grid vectors).
   template <typename T>
@@ -484,126 +252,22 @@ class Reader {
     if (v.size() != n) fail(path, fmt::format("wrong shape ({}), expected ({})", v.size(), n));
     return v;
   }
-  double scalar(const std::string& path) {
-    Shape shape;
-    Handle ds = open_dataset(path, H5T_FLOAT, sizeof(double), 0, 0, shape, "float64");
-    double v = 0;
-    if (H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v) < 0) {
-      fail(path, "cannot read" + hdf5_detail());
-    }
-    return v;
-  }
-
+  double scalar(const std::string& path) { return hdf5::read_scalar<double>(file_, path, path_); }
   std::vector<std::string> strings(const std::string& path) {
-    Shape shape;
-    Handle ds = open_dataset(path, H5T_STRING, 0, 1, 0, shape, "string");
-    return read_strings(path, ds, static_cast<std::size_t>(shape.dims[0]));
+    return hdf5::read_strings(file_, path, path_);
   }
-  std::string string(const std::string& path) {
-    Shape shape;
-    Handle ds = open_dataset(path, H5T_STRING, 0, 0, 0, shape, "string");
-    return read_strings(path, ds, 1).front();
-  }
-
+  std::string string(const std::string& path) { return hdf5::read_string(file_, path, path_); }
   // Names of the datasets in a group, in creation order when the group tracks it (files of this
   // writer), else in name order.
   std::vector<std::string> members(const std::string& group) {
-    if (!exists(group)) fail(group, "missing group");
-    Handle g(H5Gopen2(file_.get(), group.c_str(), H5P_DEFAULT), H5Gclose);
-    if (!g.valid()) fail(group, "cannot open, not a group" + hdf5_detail());
-    Handle gcpl(H5Gget_create_plist(g.get()), H5Pclose);
-    unsigned flags = 0;
-    H5Pget_link_creation_order(gcpl.get(), &flags);
-    const H5_index_t index = (flags & H5P_CRT_ORDER_INDEXED) ? H5_INDEX_CRT_ORDER : H5_INDEX_NAME;
-    std::vector<std::string> names;
-    auto cb = [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
-      static_cast<std::vector<std::string>*>(data)->emplace_back(name);
-      return 0;
-    };
-    if (H5Literate(g.get(), index, H5_ITER_INC, nullptr, cb, &names) < 0) {
-      fail(group, "cannot list members" + hdf5_detail());
-    }
-    return names;
+    return hdf5::members(file_, group, path_);
   }
 
  private:
-  bool exists(const std::string& path) {
-    // H5Lexists needs every intermediate group to exist, so walk the path.
-    std::size_t pos = 0;
-    while (pos != std::string::npos) {
-      pos = path.find('/', pos + 1);
-      const std::string prefix = path.substr(0, pos);
-      if (H5Lexists(file_.get(), prefix.c_str(), H5P_DEFAULT) <= 0) {
-        H5Eclear2(H5E_DEFAULT);
-        return false;
-      }
-    }
-    return true;
-  }
-
-  std::string read_string_attribute(const char* name) {
-    if (H5Aexists(file_.get(), name) <= 0) {
-      H5Eclear2(H5E_DEFAULT);
-      fail(std::string("/") + name, "missing root attribute (not a sinew model file?)");
-    }
-    Handle a(H5Aopen(file_.get(), name, H5P_DEFAULT), H5Aclose);
-    Handle t(H5Aget_type(a.get()), H5Tclose);
-    Handle space(H5Aget_space(a.get()), H5Sclose);
-    if (!t.valid() || H5Tget_class(t.get()) != H5T_STRING ||
-        H5Sget_simple_extent_npoints(space.get()) != 1) {
-      fail(std::string("/") + name, "must be one string");
-    }
-    if (H5Tis_variable_str(t.get()) > 0) {
-      Handle mem = string_type();
-      char* value = nullptr;
-      if (H5Aread(a.get(), mem.get(), &value) < 0)
-        fail(std::string("/") + name, "cannot read" + hdf5_detail());
-      std::string out = value ? value : "";
-      H5free_memory(value);
-      return out;
-    }
-    const std::size_t size = H5Tget_size(t.get());
-    std::vector<char> buf(size + 1, '\0');
-    Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
-    H5Tset_size(mem.get(), size + 1);
-    if (H5Aread(a.get(), mem.get(), buf.data()) < 0)
-      fail(std::string("/") + name, "cannot read" + hdf5_detail());
-    return std::string(buf.data());
-  }
-
-  std::vector<std::string> read_strings(const std::string& path, const Handle& ds, std::size_t n) {
-    std::vector<std::string> out;
-    out.reserve(n);
-    if (n == 0) return out;
-    Handle type(H5Dget_type(ds.get()), H5Tclose);
-    if (H5Tis_variable_str(type.get()) > 0) {
-      Handle mem = string_type();
-      std::vector<char*> ptrs(n, nullptr);
-      if (H5Dread(ds.get(), mem.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0) {
-        fail(path, "cannot read" + hdf5_detail());
-      }
-      for (char* p : ptrs) out.emplace_back(p ? p : "");
-      Handle space(H5Dget_space(ds.get()), H5Sclose);
-      H5Dvlen_reclaim(mem.get(), space.get(), H5P_DEFAULT, ptrs.data());
-      return out;
-    }
-    // Fixed-length strings (as other tools may write them): NUL- or space-padded.
-    const std::size_t size = H5Tget_size(type.get());
-    Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
-    H5Tset_size(mem.get(), size + 1);
-    std::vector<char> buf(n * (size + 1), '\0');
-    if (H5Dread(ds.get(), mem.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0) {
-      fail(path, "cannot read" + hdf5_detail());
-    }
-    for (std::size_t i = 0; i < n; ++i) out.emplace_back(buf.data() + i * (size + 1));
-    return out;
-  }
-
   std::string path_;
-  Handle file_;
+  hdf5::Handle file_;
 };
 
-// Checks a CSR offsets array over `groups` groups into `total` entries: size groups + 1, starts
 // at 0, never decreases, ends at total.
 void check_offsets(const Reader& r, const std::string& path, const std::vector<Offset>& off,
                    std::size_t groups, std::size_t total, const std::string& entries) {
@@ -678,8 +342,8 @@ Model read_all(Reader& r) {
       mat.name = names[i];
       try {
         mat.law = material_law_from_string(laws[i]);
-      } catch (const std::invalid_argument& ex) {
-        r.fail("/materials/law", static_cast<std::int64_t>(i), ex.what());
+      } catch (const FormatError& ex) {
+        r.fail("/materials/law", static_cast<std::int64_t>(i), ex.problem());
       }
       mat.youngs_modulus = e[i];
       mat.poisson_ratio = nu[i];
@@ -732,8 +396,8 @@ Model read_all(Reader& r) {
       mu.optimal_stretch = lopt[i];
       try {
         mu.force_length = force_length_curve_from_string(curve[i]);
-      } catch (const std::invalid_argument& ex) {
-        r.fail("/muscles/force_length", static_cast<std::int64_t>(i), ex.what());
+      } catch (const FormatError& ex) {
+        r.fail("/muscles/force_length", static_cast<std::int64_t>(i), ex.problem());
       }
       mu.passive_p1 = p1[i];
       mu.passive_p2 = p2[i];
@@ -793,8 +457,8 @@ Model read_all(Reader& r) {
       s.name = names[i];
       try {
         s.role = surface_role_from_string(roles[i]);
-      } catch (const std::invalid_argument& ex) {
-        r.fail("/surfaces/role", static_cast<std::int64_t>(i), ex.what());
+      } catch (const FormatError& ex) {
+        r.fail("/surfaces/role", static_cast<std::int64_t>(i), ex.problem());
       }
       s.vertices = slice(vertices, v_off, i);
       s.triangles = slice(triangles, t_off, i);
@@ -830,7 +494,6 @@ Model read_all(Reader& r) {
 
 void write_model(const Model& model, const std::string& path) {
   validate_model(model, path);
-  silence_hdf5();
   const std::string tmp = path + ".tmp-" + std::to_string(static_cast<long>(getpid()));
   try {
     Writer w(tmp, path);
@@ -850,7 +513,6 @@ void write_model(const Model& model, const std::string& path) {
 }
 
 Model read_model(const std::string& path) {
-  silence_hdf5();
   Reader r(path);
   r.open();
   r.check_format();

@@ -54,6 +54,17 @@ class Validator {
     throw FormatError(file_, dataset, problem);
   }
 
+  // Materials, muscles and surfaces are looked up by name: non-empty and unique in their table.
+  // Returns the "<kind> '<name>': " prefix of the entry's further messages.
+  std::string unique_name(const std::string& dataset, std::int64_t index, const std::string& name,
+                          const char* kind, std::set<std::string>& seen) const {
+    if (name.empty()) fail(dataset, index, fmt::format("{} name is empty", kind));
+    if (!seen.insert(name).second) {
+      fail(dataset, index, fmt::format("duplicate {} name '{}'", kind, name));
+    }
+    return fmt::format("{} '{}': ", kind, name);
+  }
+
   void check_size(const std::string& dataset, std::size_t got, std::size_t expected,
                   const std::string& what) const {
     if (got != expected) {
@@ -154,11 +165,7 @@ class Validator {
     for (std::size_t i = 0; i < ms.size(); ++i) {
       const auto& mat = ms[i];
       const auto idx = static_cast<std::int64_t>(i);
-      if (mat.name.empty()) fail("/materials/name", idx, "material name is empty");
-      if (!names.insert(mat.name).second) {
-        fail("/materials/name", idx, "duplicate material name '" + mat.name + "'");
-      }
-      const std::string who = "material '" + mat.name + "': ";
+      const std::string who = unique_name("/materials/name", idx, mat.name, "material", names);
       auto positive = [&](const char* dataset, double v, const char* what) {
         if (!std::isfinite(v) || !(v > 0)) {
           fail(dataset, idx, fmt::format("{}{} must be positive and finite, got {}", who, what, v));
@@ -173,8 +180,7 @@ class Validator {
       positive("/materials/shear_modulus", mat.shear_modulus, "shear modulus");
       positive("/materials/bulk_modulus", mat.bulk_modulus, "bulk modulus");
       positive("/materials/density", mat.density, "density");
-      const double mu = mat.youngs_modulus / (2.0 * (1.0 + mat.poisson_ratio));
-      const double kappa = mat.youngs_modulus / (3.0 * (1.0 - 2.0 * mat.poisson_ratio));
+      const auto [mu, kappa] = shear_and_bulk_modulus(mat.youngs_modulus, mat.poisson_ratio);
       if (std::abs(mat.shear_modulus - mu) > kModulusRelativeTolerance * mu) {
         fail("/materials/shear_modulus", idx,
              fmt::format("{}shear modulus {} inconsistent with E/(2(1+nu)) = {}", who,
@@ -245,10 +251,7 @@ class Validator {
     for (std::size_t i = 0; i < m_.muscles.size(); ++i) {
       const auto& mu = m_.muscles[i];
       const auto idx = static_cast<std::int64_t>(i);
-      if (mu.name.empty()) fail("/muscles/name", idx, "muscle name is empty");
-      if (!names.insert(mu.name).second)
-        fail("/muscles/name", idx, "duplicate muscle name '" + mu.name + "'");
-      const std::string who = "muscle '" + mu.name + "': ";
+      const std::string who = unique_name("/muscles/name", idx, mu.name, "muscle", names);
       if (mu.material < 0 || static_cast<std::size_t>(mu.material) >= m_.materials.size()) {
         fail("/muscles/material", idx,
              fmt::format("{}material id {} out of range [0, {})", who, mu.material,
@@ -303,10 +306,7 @@ class Validator {
     for (std::size_t s = 0; s < m_.surfaces.size(); ++s) {
       const auto& sf = m_.surfaces[s];
       const auto idx = static_cast<std::int64_t>(s);
-      if (sf.name.empty()) fail("/surfaces/name", idx, "surface name is empty");
-      if (!names.insert(sf.name).second)
-        fail("/surfaces/name", idx, "duplicate surface name '" + sf.name + "'");
-      const std::string who = "surface '" + sf.name + "': ";
+      const std::string who = unique_name("/surfaces/name", idx, sf.name, "surface", names);
       for (std::size_t v = 0; v < sf.vertices.size(); ++v) {
         if (!finite(sf.vertices[v])) {
           fail("/surfaces/vertices", v_flat + static_cast<std::int64_t>(v),

@@ -1,7 +1,6 @@
 #include "sinew/postprocess/results_reader.hpp"
 
 #include <fmt/format.h>
-#include <hdf5.h>
 
 #include <algorithm>
 #include <array>
@@ -11,20 +10,21 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
-#include "sinew/simulator/hdf5_io.hpp"
-#include "sinew/simulator/results_writer.hpp"
+#include "sinew/formats/hdf5_file.hpp"
+#include "sinew/formats/results_format.hpp"
 
 namespace sinew::postprocess {
+
+namespace h5 = formats::hdf5;
+
 namespace {
 
-namespace h5 = simulator::h5;
-using simulator::kResultsFormatName;
-using simulator::kResultsFormatVersion;
+using formats::kResultsFormatName;
+using formats::kResultsFormatVersion;
 
 h5::Handle open_results(const std::string& path) {
-  h5::quiet_errors();
   if (!std::filesystem::exists(path)) throw IoError(path, "", "no such file");
-  if (H5Fis_hdf5(path.c_str()) <= 0) {
+  if (!h5::is_hdf5(path)) {
     throw FormatError(path, "", "not an HDF5 file (expected sinew results, results.h5)");
   }
   auto file = h5::open_file(path, false);
@@ -44,21 +44,8 @@ h5::Handle open_results(const std::string& path) {
 }
 
 std::vector<std::string> surface_names(hid_t file, const std::string& path) {
-  std::vector<std::string> names;
-  if (!h5::exists(file, "surfaces")) return names;
-  auto group = h5::open_group(file, "/surfaces", path);
-  H5G_info_t info;
-  if (H5Gget_info(group, &info) < 0) throw FormatError(path, "/surfaces", "cannot list the group");
-  for (hsize_t i = 0; i < info.nlinks; ++i) {
-    const ssize_t len =
-        H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
-    if (len < 0) throw FormatError(path, "/surfaces", "cannot read a member's name").at(i);
-    std::string name(static_cast<std::size_t>(len) + 1, '\0');
-    H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(),
-                       H5P_DEFAULT);
-    name.resize(static_cast<std::size_t>(len));
-    names.push_back(name);
-  }
+  if (!h5::exists(file, "surfaces")) return {};
+  auto names = h5::members(file, "/surfaces", path);
   std::sort(names.begin(), names.end());
   return names;
 }

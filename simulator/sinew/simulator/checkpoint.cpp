@@ -7,10 +7,12 @@
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
+#include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/sha256.hpp"
-#include "sinew/simulator/hdf5_io.hpp"
 
 namespace sinew::simulator {
+
+namespace h5 = formats::hdf5;
 
 std::string run_digest(const std::string& scene_text, const std::string& model_path,
                        const std::string& precision) {

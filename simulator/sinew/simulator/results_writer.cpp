@@ -12,11 +12,12 @@
 #include <fmt/ranges.h>
 
 #include "sinew/common/error.hpp"
-#include "sinew/simulator/hdf5_io.hpp"
+#include "sinew/formats/hdf5_file.hpp"
 
 namespace sinew::simulator {
 
 namespace fs = std::filesystem;
+namespace h5 = formats::hdf5;
 
 std::vector<double> surface_positions(const formats::Model& model, const formats::Surface& surface,
                                       const std::vector<double>& u) {
@@ -122,15 +123,13 @@ ResultsWriter::ResultsWriter(const std::string& directory, const formats::Model&
     h5::write(f, "/mesh/material", {e}, mat.data(), p);
   }
   auto frames = h5::create_group(f, "/frames", p);
-  impl_->time = h5::create_series(f, "/frames/time", {}, H5T_IEEE_F64LE, p);
-  impl_->step = h5::create_series(f, "/frames/step", {}, H5T_STD_I64LE, p);
-  impl_->displacement = h5::create_series(f, "/frames/displacement", {n, 3}, H5T_IEEE_F64LE, p);
-  if (options_.stress)
-    impl_->von_mises = h5::create_series(f, "/frames/von_mises", {e}, H5T_IEEE_F64LE, p);
-  if (options_.jacobian)
-    impl_->jacobian = h5::create_series(f, "/frames/J", {e}, H5T_IEEE_F64LE, p);
+  impl_->time = h5::create_series<double>(f, "/frames/time", {}, p);
+  impl_->step = h5::create_series<std::int64_t>(f, "/frames/step", {}, p);
+  impl_->displacement = h5::create_series<double>(f, "/frames/displacement", {n, 3}, p);
+  if (options_.stress) impl_->von_mises = h5::create_series<double>(f, "/frames/von_mises", {e}, p);
+  if (options_.jacobian) impl_->jacobian = h5::create_series<double>(f, "/frames/J", {e}, p);
   if (options_.energy_density) {
-    impl_->energy_density = h5::create_series(f, "/frames/energy_density", {e}, H5T_IEEE_F64LE, p);
+    impl_->energy_density = h5::create_series<double>(f, "/frames/energy_density", {e}, p);
   }
   if (options_.surfaces && !visual_.empty()) {
     h5::create_group(f, "/surfaces", p);
@@ -144,7 +143,7 @@ ResultsWriter::ResultsWriter(const std::string& directory, const formats::Model&
       }
       h5::write(f, g + "/triangles", {surf.triangles.size(), 3}, tri.data(), p);
       impl_->surfaces.push_back(
-          h5::create_series(f, g + "/positions", {surf.vertices.size(), 3}, H5T_IEEE_F64LE, p));
+          h5::create_series<double>(f, g + "/positions", {surf.vertices.size(), 3}, p));
     }
   }
   h5::flush(f, p);
@@ -229,26 +228,24 @@ void ResultsWriter::append_frame(double time, std::int64_t step, const std::vect
     return v.data();
   };
   auto& impl = *impl_;
-  h5::append(impl.displacement, f, H5T_NATIVE_DOUBLE, u.data(), p, "/frames/displacement");
+  h5::append(impl.displacement, f, u.data(), p, "/frames/displacement");
   if (options_.stress)
-    h5::append(impl.von_mises, f, H5T_NATIVE_DOUBLE, check(fields.von_mises, "/frames/von_mises"),
-               p, "/frames/von_mises");
+    h5::append(impl.von_mises, f, check(fields.von_mises, "/frames/von_mises"), p,
+               "/frames/von_mises");
   if (options_.jacobian)
-    h5::append(impl.jacobian, f, H5T_NATIVE_DOUBLE, check(fields.jacobian, "/frames/J"), p,
-               "/frames/J");
+    h5::append(impl.jacobian, f, check(fields.jacobian, "/frames/J"), p, "/frames/J");
   if (options_.energy_density) {
-    h5::append(impl.energy_density, f, H5T_NATIVE_DOUBLE,
-               check(fields.energy_density, "/frames/energy_density"), p, "/frames/energy_density");
+    h5::append(impl.energy_density, f, check(fields.energy_density, "/frames/energy_density"), p,
+               "/frames/energy_density");
   }
   for (std::size_t i = 0; i < visual_.size(); ++i) {
     const auto& surf = model_.surfaces[visual_[i]];
     const auto x = surface_positions(model_, surf, u);
-    h5::append(impl.surfaces[i], f, H5T_NATIVE_DOUBLE, x.data(), p,
-               surface_group(surf) + "/positions");
+    h5::append(impl.surfaces[i], f, x.data(), p, surface_group(surf) + "/positions");
   }
   // time and step last: a reader that sees the frame's time sees all of its data.
-  h5::append(impl.step, f, H5T_NATIVE_INT64, &step, p, "/frames/step");
-  h5::append(impl.time, f, H5T_NATIVE_DOUBLE, &time, p, "/frames/time");
+  h5::append(impl.step, f, &step, p, "/frames/step");
+  h5::append(impl.time, f, &time, p, "/frames/time");
   h5::flush(impl.file, p);
   times_.push_back(time);
   write_index();
@@ -282,10 +279,14 @@ std::string ResultsWriter::xdmf_text() const {
         fmt::arg("start", fmt::join(start, " ")), fmt::arg("stride", fmt::join(stride, " ")),
         fmt::arg("full", fmt::join(full, " ")), fmt::arg("h5", h5name), fmt::arg("ds", dataset));
   };
+  // The opening of frame f's grid (volume and surfaces alike): its name and time.
+  const auto frame_grid = [&](const std::string& name, std::size_t f) {
+    x << fmt::format("   <Grid Name=\"{}_{}\" GridType=\"Uniform\">\n", name, f);
+    x << fmt::format("    <Time Value=\"{:.17g}\"/>\n", times_[f]);
+  };
   x << "  <Grid Name=\"volume\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   for (std::size_t f = 0; f < frames; ++f) {
-    x << fmt::format("   <Grid Name=\"volume_{}\" GridType=\"Uniform\">\n", f);
-    x << fmt::format("    <Time Value=\"{:.17g}\"/>\n", times_[f]);
+    frame_grid("volume", f);
     x << fmt::format(
         "    <Topology TopologyType=\"Hexahedron\" NumberOfElements=\"{e}\">\n"
         "     <DataItem Dimensions=\"{e} 8\" NumberType=\"Int\" Precision=\"4\" "
@@ -321,9 +322,7 @@ std::string ResultsWriter::xdmf_text() const {
         "  <Grid Name=\"surface_{}\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
         xml_escape(surf.name));
     for (std::size_t f = 0; f < frames; ++f) {
-      x << fmt::format("   <Grid Name=\"surface_{}_{}\" GridType=\"Uniform\">\n",
-                       xml_escape(surf.name), f);
-      x << fmt::format("    <Time Value=\"{:.17g}\"/>\n", times_[f]);
+      frame_grid("surface_" + xml_escape(surf.name), f);
       x << fmt::format(
           "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"{t}\">\n"
           "     <DataItem Dimensions=\"{t} 3\" NumberType=\"Int\" Precision=\"4\" "

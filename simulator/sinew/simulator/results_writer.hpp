@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "sinew/formats/results_format.hpp"
 #include "sinew/formats/model.hpp"
 #include "sinew/simulator/engine.hpp"
 
@@ -42,8 +43,8 @@ struct ResultsOptions {
   std::string scene_file;       // recorded as an attribute
 };
 
-inline constexpr const char* kResultsFormatName = "sinew-results";
-inline constexpr int kResultsFormatVersion = 1;
+using formats::kResultsFormatName;  // formats/results_format.hpp
+using formats::kResultsFormatVersion;
 
 // Vertex positions of a visual surface for nodal displacements u (N × 3), V × 3, m.
 std::vector<double> surface_positions(const formats::Model& model, const formats::Surface& surface,

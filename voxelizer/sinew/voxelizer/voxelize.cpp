@@ -476,14 +476,8 @@ class Pipeline {
     formats::build_lattice_topology(m);
     for (const auto& name : used_materials_) {
       const MaterialSpec* ms = spec_.find_material(name);
-      formats::Material mat;
-      mat.name = ms->name;
-      mat.youngs_modulus = ms->youngs_modulus;
-      mat.poisson_ratio = ms->poisson_ratio;
-      mat.shear_modulus = ms->youngs_modulus / (2 * (1 + ms->poisson_ratio));
-      mat.bulk_modulus = ms->youngs_modulus / (3 * (1 - 2 * ms->poisson_ratio));
-      mat.density = ms->density;
-      m.materials.push_back(mat);
+      m.materials.push_back(formats::make_neo_hookean_material(ms->name, ms->youngs_modulus,
+                                                               ms->poisson_ratio, ms->density));
     }
     const std::size_t ne = fractions_.voxels.size();
     const std::size_t nmat = m.materials.size();

@@ -1,0 +1,603 @@
+#include "sinew/formats/hdf5_file.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <new>
+#include <type_traits>
+
+#include "sinew/common/error.hpp"
+
+namespace sinew::formats::hdf5 {
+
+namespace {
+
+// The memory type, the file type and the name in errors of each element type.
+template <typename T>
+struct Type {
+  static hid_t native();
+  static hid_t stored();
+  static const char* name();
+};
+
+// H5T_NATIVE_* are macros that call H5open(), so they are looked up at run time, not cached.
+#define SINEW_HDF5_TYPE(T, NATIVE, STORED, NAME) \
+  template <>                                    \
+  hid_t Type<T>::native() {                      \
+    return NATIVE;                               \
+  }                                              \
+  template <>                                    \
+  hid_t Type<T>::stored() {                      \
+    return STORED;                               \
+  }                                              \
+  template <>                                    \
+  const char* Type<T>::name() {                  \
+    return NAME;                                 \
+  }
+SINEW_HDF5_TYPE(double, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, "float64")
+SINEW_HDF5_TYPE(float, H5T_NATIVE_FLOAT, H5T_IEEE_F32LE, "float32")
+SINEW_HDF5_TYPE(std::int32_t, H5T_NATIVE_INT32, H5T_STD_I32LE, "int32")
+SINEW_HDF5_TYPE(std::int64_t, H5T_NATIVE_INT64, H5T_STD_I64LE, "int64")
+SINEW_HDF5_TYPE(std::uint8_t, H5T_NATIVE_UINT8, H5T_STD_U8LE, "uint8")
+#undef SINEW_HDF5_TYPE
+
+herr_t innermost(unsigned, const H5E_error2_t* err, void* data) {
+  // Walking downward (API call first), so the last non-empty description is the innermost one.
+  if (err->desc && *err->desc) *static_cast<std::string*>(data) = err->desc;
+  return 0;
+}
+
+IoError io_fail(const std::string& file, const std::string& name, const std::string& what) {
+  return IoError(file, name, what + error_detail());
+}
+FormatError format_fail(const std::string& file, const std::string& name, const std::string& what) {
+  return FormatError(file, name, what + error_detail());
+}
+
+// Property lists without object time stamps: the same data must give byte-identical files.
+Handle untimed(hid_t cls) {
+  Handle p(H5Pcreate(cls), H5Pclose);
+  H5Pset_obj_track_times(p, false);
+  return p;
+}
+
+Handle scalar_space() {
+  return Handle(H5Screate(H5S_SCALAR), H5Sclose);
+}
+
+Handle simple_space(const std::vector<hsize_t>& dims, const hsize_t* maxdims = nullptr) {
+  if (dims.empty()) return scalar_space();
+  return Handle(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims), H5Sclose);
+}
+
+Handle utf8_string_type() {
+  Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(t, H5T_VARIABLE);
+  H5Tset_cset(t, H5T_CSET_UTF8);
+  return t;
+}
+
+// The path of an object within its file ("/" for the root), for naming attributes in errors.
+std::string attribute_path(hid_t obj, const std::string& name) {
+  const ssize_t len = H5Iget_name(obj, nullptr, 0);
+  std::string path = "/";
+  if (len > 0) {
+    path.assign(static_cast<std::size_t>(len) + 1, '\0');
+    H5Iget_name(obj, path.data(), path.size());
+    path.resize(static_cast<std::size_t>(len));
+  }
+  H5Eclear2(H5E_DEFAULT);
+  return path.back() == '/' ? path + name : path + "/" + name;
+}
+
+std::string show_dims(const std::vector<hsize_t>& dims) {
+  if (dims.empty()) return "scalar";
+  std::string s = "(";
+  for (std::size_t i = 0; i < dims.size(); ++i) s += (i ? ", " : "") + std::to_string(dims[i]);
+  return s + ")";
+}
+
+std::vector<hsize_t> dims_of(hid_t dataset, const std::string& file, const std::string& name) {
+  Handle space(H5Dget_space(dataset), H5Sclose);
+  const int rank = space.valid() ? H5Sget_simple_extent_ndims(space) : -1;
+  if (rank < 0) throw format_fail(file, name, "cannot read the shape");
+  std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+  return dims;
+}
+
+// Allocates n values, reporting a count too large for memory (a corrupt shape) as FormatError.
+template <typename T>
+std::vector<T> allocate(hsize_t n, const std::string& file, const std::string& name) {
+  std::vector<T> out;
+  try {
+    out.resize(static_cast<std::size_t>(n));
+  } catch (const std::bad_alloc&) {
+    throw FormatError(file, name, fmt::format("cannot allocate memory for {} values", n));
+  } catch (const std::length_error&) {
+    throw FormatError(file, name, fmt::format("cannot allocate memory for {} values", n));
+  }
+  return out;
+}
+
+// Opens a dataset whose stored type must have class `cls` and, for numbers, T's size and sign.
+template <typename T>
+Handle open_typed(hid_t loc, const std::string& name, const std::string& file, H5T_class_t cls,
+                  const char* dtype) {
+  if (!exists(loc, name)) throw FormatError(file, name, "missing dataset");
+  Handle ds(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!ds.valid()) throw format_fail(file, name, "cannot open, not a dataset");
+  Handle type(H5Dget_type(ds), H5Tclose);
+  bool ok = type.valid() && H5Tget_class(type) == cls;
+  if (ok && cls != H5T_STRING) ok = H5Tget_size(type) == sizeof(T);
+  if (ok && cls == H5T_INTEGER) {
+    ok = H5Tget_sign(type) == (std::is_signed_v<T> ? H5T_SGN_2 : H5T_SGN_NONE);
+  }
+  if (!ok) throw FormatError(file, name, fmt::format("wrong dtype, expected {}", dtype));
+  return ds;
+}
+
+// Checks rank (0: scalar, 1: (n), 2: (n, cols)) and the row limit; returns the dims.
+std::vector<hsize_t> expect_shape(hid_t ds, int rank, hsize_t cols, const std::string& file,
+                                  const std::string& name) {
+  const auto dims = dims_of(ds, file, name);
+  if (dims.size() > 2)
+    throw FormatError(file, name, fmt::format("wrong shape, rank {}", dims.size()));
+  const std::string want = rank == 0 ? "scalar" : rank == 1 ? "(n)" : fmt::format("(n, {})", cols);
+  if (static_cast<int>(dims.size()) != rank || (rank == 2 && dims[1] != cols)) {
+    throw FormatError(file, name,
+                      fmt::format("wrong shape {}, expected {}", show_dims(dims), want));
+  }
+  if (rank > 0 && dims[0] > static_cast<hsize_t>(std::numeric_limits<std::int32_t>::max())) {
+    throw FormatError(file, name,
+                      fmt::format("{} rows, more than 32-bit ids can address", dims[0]));
+  }
+  return dims;
+}
+
+std::vector<std::string> read_string_values(hid_t ds, std::size_t n, const std::string& file,
+                                            const std::string& name) {
+  std::vector<std::string> out;
+  out.reserve(n);
+  if (n == 0) return out;
+  Handle type(H5Dget_type(ds), H5Tclose);
+  if (H5Tis_variable_str(type) > 0) {
+    Handle mem = utf8_string_type();
+    std::vector<char*> ptrs(n, nullptr);
+    if (H5Dread(ds, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0) {
+      throw format_fail(file, name, "cannot read");
+    }
+    for (char* p : ptrs) out.emplace_back(p ? p : "");
+    Handle space(H5Dget_space(ds), H5Sclose);
+    H5Dvlen_reclaim(mem, space, H5P_DEFAULT, ptrs.data());
+    return out;
+  }
+  // Fixed-length: read with one more byte per value so every value ends in NUL.
+  const std::size_t size = H5Tget_size(type);
+  Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(mem, size + 1);
+  auto buf = allocate<char>(n * (size + 1), file, name);
+  if (H5Dread(ds, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0) {
+    throw format_fail(file, name, "cannot read");
+  }
+  for (std::size_t i = 0; i < n; ++i) out.emplace_back(buf.data() + i * (size + 1));
+  return out;
+}
+
+// Opens attribute `name` of `obj`, which must hold one value of class `cls`.
+Handle open_attribute(hid_t obj, const std::string& name, const std::string& file, H5T_class_t cls,
+                      const char* what) {
+  const std::string where = attribute_path(obj, name);
+  if (!has_attribute(obj, name)) throw FormatError(file, where, "missing attribute");
+  Handle a(H5Aopen(obj, name.c_str(), H5P_DEFAULT), H5Aclose);
+  if (!a.valid()) throw format_fail(file, where, "cannot open the attribute");
+  Handle t(H5Aget_type(a), H5Tclose);
+  Handle space(H5Aget_space(a), H5Sclose);
+  const H5T_class_t got = t.valid() ? H5Tget_class(t) : H5T_NO_CLASS;
+  const bool class_ok = got == cls || (cls == H5T_FLOAT && got == H5T_INTEGER);
+  if (!class_ok || H5Sget_simple_extent_npoints(space) != 1) {
+    throw FormatError(file, where, std::string("must be one ") + what);
+  }
+  return a;
+}
+
+template <typename T>
+T numeric_attribute(hid_t obj, const std::string& name, const std::string& file, H5T_class_t cls,
+                    const char* what) {
+  Handle a = open_attribute(obj, name, file, cls, what);
+  T v{};
+  if (H5Aread(a, Type<T>::native(), &v) < 0) {
+    throw format_fail(file, attribute_path(obj, name), "cannot read the attribute");
+  }
+  return v;
+}
+
+// Creates (replacing) attribute `name` and writes one value of memory type `mem`.
+void put_attribute(hid_t obj, const std::string& name, hid_t file_type, hid_t mem,
+                   const void* value, const std::string& file) {
+  Handle space = scalar_space();
+  if (H5Aexists(obj, name.c_str()) > 0) H5Adelete(obj, name.c_str());
+  Handle attr(H5Acreate2(obj, name.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  if (!attr.valid() || H5Awrite(attr, mem, value) < 0) {
+    throw io_fail(file, attribute_path(obj, name), "cannot write the attribute");
+  }
+}
+
+}  // namespace
+
+// ---- Handle, errors, types --------------------------------------------------------------------
+
+Handle& Handle::operator=(Handle&& o) noexcept {
+  if (this != &o) {
+    reset();
+    id_ = o.id_;
+    closer_ = o.closer_;
+    o.id_ = -1;
+  }
+  return *this;
+}
+
+void Handle::reset() {
+  if (id_ >= 0 && closer_) closer_(id_);
+  id_ = -1;
+}
+
+bool Handle::close() {
+  const herr_t status = id_ >= 0 && closer_ ? closer_(id_) : 0;
+  id_ = -1;
+  return status >= 0;
+}
+
+void quiet_errors() {
+  static std::once_flag once;
+  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+}
+
+std::string error_detail() {
+  std::string detail;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, innermost, &detail);
+  H5Eclear2(H5E_DEFAULT);
+  return detail.empty() ? std::string() : " (HDF5: " + detail + ")";
+}
+
+// ---- Files ------------------------------------------------------------------------------------
+
+bool is_hdf5(const std::string& path) {
+  quiet_errors();
+  const htri_t r = H5Fis_hdf5(path.c_str());
+  H5Eclear2(H5E_DEFAULT);
+  return r > 0;
+}
+
+Handle create_file(const std::string& path, const std::string& display) {
+  quiet_errors();
+  Handle fcpl = untimed(H5P_FILE_CREATE);  // the root group: no time stamps
+  Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl, H5P_DEFAULT), H5Fclose);
+  if (!f.valid()) throw io_fail(display.empty() ? path : display, "", "cannot create the file");
+  return f;
+}
+
+Handle open_file(const std::string& path, bool writable) {
+  quiet_errors();
+  Handle f(H5Fopen(path.c_str(), writable ? H5F_ACC_RDWR : H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!f.valid()) throw io_fail(path, "", "cannot open as an HDF5 file");
+  return f;
+}
+
+Handle open_checked(const std::string& path) {
+  quiet_errors();
+  {
+    // HDF5 says "unable to open file" for a missing file and for a damaged one alike; ask the
+    // system first so a missing or unreadable file is an IoError with the real reason.
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe) throw IoError(path, "", std::string("cannot open: ") + std::strerror(errno));
+  }
+  if (!is_hdf5(path)) throw FormatError(path, "", "not an HDF5 file (no HDF5 signature found)");
+  Handle f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!f.valid()) {
+    throw format_fail(path, "", "cannot open as HDF5, the file is truncated or corrupt");
+  }
+  return f;
+}
+
+void close_file(Handle& file, const std::string& display) {
+  if (!file.close()) throw io_fail(display, "", "cannot close (flush) the file");
+}
+
+void flush(hid_t file, const std::string& path) {
+  if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) throw io_fail(path, "", "cannot flush to disk");
+}
+
+// ---- Groups -----------------------------------------------------------------------------------
+
+Handle create_group(hid_t loc, const std::string& name, const std::string& file, bool ordered) {
+  Handle gcpl = untimed(H5P_GROUP_CREATE);
+  if (ordered) H5Pset_link_creation_order(gcpl, H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED);
+  Handle g(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, gcpl, H5P_DEFAULT), H5Gclose);
+  if (!g.valid()) throw io_fail(file, name, "cannot create the group");
+  return g;
+}
+
+Handle open_group(hid_t loc, const std::string& name, const std::string& file) {
+  if (!exists(loc, name)) throw FormatError(file, name, "missing group");
+  Handle g(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), H5Gclose);
+  if (!g.valid()) throw format_fail(file, name, "cannot open, not a group");
+  return g;
+}
+
+bool exists(hid_t loc, const std::string& name) {
+  // H5Lexists needs every intermediate group to exist, so walk the path prefix by prefix.
+  std::size_t pos = 0;
+  while (true) {
+    pos = name.find('/', pos + 1);
+    const auto part = name.substr(0, pos);
+    if (!part.empty() && part != "/" && H5Lexists(loc, part.c_str(), H5P_DEFAULT) <= 0) {
+      H5Eclear2(H5E_DEFAULT);
+      return false;
+    }
+    if (pos == std::string::npos) return true;
+  }
+}
+
+std::vector<std::string> members(hid_t loc, const std::string& group, const std::string& file) {
+  Handle g = open_group(loc, group, file);
+  Handle gcpl(H5Gget_create_plist(g), H5Pclose);
+  unsigned flags = 0;
+  H5Pget_link_creation_order(gcpl, &flags);
+  const H5_index_t index = (flags & H5P_CRT_ORDER_INDEXED) ? H5_INDEX_CRT_ORDER : H5_INDEX_NAME;
+  std::vector<std::string> names;
+  auto cb = [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
+    static_cast<std::vector<std::string>*>(data)->emplace_back(name);
+    return 0;
+  };
+  if (H5Literate(g, index, H5_ITER_INC, nullptr, cb, &names) < 0) {
+    throw format_fail(file, group, "cannot list members");
+  }
+  return names;
+}
+
+// ---- Datasets ---------------------------------------------------------------------------------
+
+namespace {
+void write_dataset(hid_t loc, const std::string& name, const Handle& space, hid_t file_type,
+                   hid_t mem_type, const void* data, bool empty, const std::string& file) {
+  if (!space.valid()) throw io_fail(file, name, "cannot create a dataspace");
+  Handle dcpl = untimed(H5P_DATASET_CREATE);
+  Handle ds(H5Dcreate2(loc, name.c_str(), file_type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT),
+            H5Dclose);
+  if (!ds.valid()) throw io_fail(file, name, "cannot create the dataset");
+  if (!empty && H5Dwrite(ds, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
+    throw io_fail(file, name, "cannot write the dataset");
+  }
+}
+}  // namespace
+
+template <typename T>
+void write(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims, const T* data,
+           const std::string& file) {
+  hsize_t count = 1;
+  for (auto d : dims) count *= d;
+  write_dataset(loc, name, simple_space(dims), Type<T>::stored(), Type<T>::native(), data,
+                count == 0, file);
+}
+
+void write_strings(hid_t loc, const std::string& name, const std::vector<std::string>& values,
+                   const std::string& file) {
+  std::vector<const char*> ptrs;
+  ptrs.reserve(values.size());
+  for (const auto& s : values) ptrs.push_back(s.c_str());
+  Handle type = utf8_string_type();
+  write_dataset(loc, name, simple_space({values.size()}), type, type, ptrs.data(), ptrs.empty(),
+                file);
+}
+
+void write_string(hid_t loc, const std::string& name, const std::string& value,
+                  const std::string& file) {
+  const char* ptr = value.c_str();
+  Handle type = utf8_string_type();
+  write_dataset(loc, name, scalar_space(), type, type, &ptr, false, file);
+}
+
+Handle open_dataset(hid_t loc, const std::string& name, const std::string& file) {
+  if (!exists(loc, name)) throw FormatError(file, name, "missing dataset");
+  Handle ds(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!ds.valid()) throw format_fail(file, name, "cannot open, not a dataset");
+  return ds;
+}
+
+std::vector<hsize_t> shape(hid_t loc, const std::string& name, const std::string& file) {
+  return dims_of(open_dataset(loc, name, file), file, name);
+}
+
+template <typename T>
+std::vector<T> read(hid_t loc, const std::string& name, const std::string& file,
+                    std::int64_t expected) {
+  Handle ds = open_dataset(loc, name, file);
+  hsize_t n = 1;
+  for (auto d : dims_of(ds, file, name)) n *= d;
+  if (expected >= 0 && n != static_cast<hsize_t>(expected)) {
+    throw FormatError(file, name, fmt::format("expected {} values, found {}", expected, n));
+  }
+  auto out = allocate<T>(n, file, name);
+  if (n > 0 && H5Dread(ds, Type<T>::native(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0) {
+    throw format_fail(file, name, "cannot read");
+  }
+  return out;
+}
+
+template <typename T>
+std::vector<T> read_array(hid_t loc, const std::string& name, const std::string& file,
+                          hsize_t cols) {
+  constexpr H5T_class_t cls = std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER;
+  Handle ds = open_typed<T>(loc, name, file, cls, Type<T>::name());
+  const auto dims = expect_shape(ds, cols == 0 ? 1 : 2, cols, file, name);
+  auto out = allocate<T>(dims[0] * (cols == 0 ? 1 : cols), file, name);
+  if (!out.empty() &&
+      H5Dread(ds, Type<T>::native(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0) {
+    throw format_fail(file, name, "cannot read");
+  }
+  return out;
+}
+
+template <typename T>
+T read_scalar(hid_t loc, const std::string& name, const std::string& file) {
+  constexpr H5T_class_t cls = std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER;
+  Handle ds = open_typed<T>(loc, name, file, cls, Type<T>::name());
+  expect_shape(ds, 0, 0, file, name);
+  T v{};
+  if (H5Dread(ds, Type<T>::native(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &v) < 0) {
+    throw format_fail(file, name, "cannot read");
+  }
+  return v;
+}
+
+std::vector<std::string> read_strings(hid_t loc, const std::string& name, const std::string& file) {
+  Handle ds = open_typed<char>(loc, name, file, H5T_STRING, "string");
+  const auto dims = expect_shape(ds, 1, 0, file, name);
+  return read_string_values(ds, static_cast<std::size_t>(dims[0]), file, name);
+}
+
+std::string read_string(hid_t loc, const std::string& name, const std::string& file) {
+  Handle ds = open_typed<char>(loc, name, file, H5T_STRING, "string");
+  expect_shape(ds, 0, 0, file, name);
+  return read_string_values(ds, 1, file, name).front();
+}
+
+// ---- Extendible datasets ----------------------------------------------------------------------
+
+template <typename T>
+Handle create_series(hid_t loc, const std::string& name, const std::vector<hsize_t>& tail,
+                     const std::string& file) {
+  std::vector<hsize_t> dims{0}, maxdims{H5S_UNLIMITED}, chunk{1};
+  for (auto t : tail) {
+    dims.push_back(t);
+    maxdims.push_back(t);
+    chunk.push_back(t == 0 ? 1 : t);  // a chunk dimension of 0 is invalid
+  }
+  Handle space = simple_space(dims, maxdims.data());
+  Handle plist = untimed(H5P_DATASET_CREATE);
+  H5Pset_chunk(plist, static_cast<int>(chunk.size()), chunk.data());
+  Handle ds(
+      H5Dcreate2(loc, name.c_str(), Type<T>::stored(), space, H5P_DEFAULT, plist, H5P_DEFAULT),
+      H5Dclose);
+  if (!ds.valid()) throw io_fail(file, name, "cannot create the extendible dataset");
+  return ds;
+}
+
+template <typename T>
+void append(hid_t dataset, hsize_t frame, const T* data, const std::string& file,
+            const std::string& name) {
+  auto dims = dims_of(dataset, file, name);
+  dims[0] = frame + 1;
+  if (H5Dset_extent(dataset, dims.data()) < 0) throw io_fail(file, name, "cannot extend");
+  Handle fspace(H5Dget_space(dataset), H5Sclose);
+  std::vector<hsize_t> start(dims.size(), 0), count = dims;
+  start[0] = frame;
+  count[0] = 1;
+  H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr);
+  Handle mspace = simple_space(count);
+  if (H5Dwrite(dataset, Type<T>::native(), mspace, fspace, H5P_DEFAULT, data) < 0) {
+    throw io_fail(file, name, "cannot write a frame");
+  }
+}
+
+void set_frames(hid_t dataset, hsize_t frames, const std::string& file, const std::string& name) {
+  auto dims = dims_of(dataset, file, name);
+  if (dims.empty()) throw FormatError(file, name, "a scalar has no frames");
+  dims[0] = frames;
+  if (H5Dset_extent(dataset, dims.data()) < 0) {
+    throw io_fail(file, name, "cannot change the frame count");
+  }
+}
+
+// ---- Attributes -------------------------------------------------------------------------------
+
+void set_attribute(hid_t obj, const std::string& name, const std::string& value,
+                   const std::string& file, StringKind kind) {
+  if (kind == StringKind::variable) {
+    Handle type = utf8_string_type();
+    const char* ptr = value.c_str();
+    put_attribute(obj, name, type, type, &ptr, file);
+    return;
+  }
+  // HDF5 has no zero-size strings: an empty value is stored as one NUL.
+  Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(type, value.empty() ? 1 : value.size());
+  H5Tset_strpad(type, H5T_STR_NULLPAD);
+  const std::string padded = value.empty() ? std::string(1, '\0') : value;
+  put_attribute(obj, name, type, type, padded.data(), file);
+}
+
+void set_attribute(hid_t obj, const std::string& name, double value, const std::string& file) {
+  put_attribute(obj, name, Type<double>::stored(), Type<double>::native(), &value, file);
+}
+void set_attribute(hid_t obj, const std::string& name, std::int64_t value,
+                   const std::string& file) {
+  put_attribute(obj, name, Type<std::int64_t>::stored(), Type<std::int64_t>::native(), &value,
+                file);
+}
+void set_attribute(hid_t obj, const std::string& name, std::int32_t value,
+                   const std::string& file) {
+  put_attribute(obj, name, Type<std::int32_t>::stored(), Type<std::int32_t>::native(), &value,
+                file);
+}
+
+bool has_attribute(hid_t obj, const std::string& name) {
+  const bool yes = H5Aexists(obj, name.c_str()) > 0;
+  H5Eclear2(H5E_DEFAULT);
+  return yes;
+}
+
+std::string string_attribute(hid_t obj, const std::string& name, const std::string& file) {
+  Handle a = open_attribute(obj, name, file, H5T_STRING, "string");
+  Handle t(H5Aget_type(a), H5Tclose);
+  if (H5Tis_variable_str(t) > 0) {
+    Handle mem = utf8_string_type();
+    char* value = nullptr;
+    if (H5Aread(a, mem, &value) < 0) {
+      throw format_fail(file, attribute_path(obj, name), "cannot read the attribute");
+    }
+    std::string out = value ? value : "";
+    H5free_memory(value);
+    return out;
+  }
+  const std::size_t size = H5Tget_size(t);
+  std::vector<char> buf(size + 1, '\0');  // one more byte: always NUL-terminated
+  Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(mem, size + 1);
+  if (H5Aread(a, mem, buf.data()) < 0) {
+    throw format_fail(file, attribute_path(obj, name), "cannot read the attribute");
+  }
+  return std::string(buf.data());
+}
+
+double double_attribute(hid_t obj, const std::string& name, const std::string& file) {
+  return numeric_attribute<double>(obj, name, file, H5T_FLOAT, "number");
+}
+std::int64_t int_attribute(hid_t obj, const std::string& name, const std::string& file) {
+  return numeric_attribute<std::int64_t>(obj, name, file, H5T_INTEGER, "integer");
+}
+
+// ---- Instantiations ---------------------------------------------------------------------------
+
+#define SINEW_HDF5_INSTANTIATE(T)                                                                \
+  template void write<T>(hid_t, const std::string&, const std::vector<hsize_t>&, const T*,       \
+                         const std::string&);                                                    \
+  template std::vector<T> read<T>(hid_t, const std::string&, const std::string&, std::int64_t);  \
+  template std::vector<T> read_array<T>(hid_t, const std::string&, const std::string&, hsize_t); \
+  template T read_scalar<T>(hid_t, const std::string&, const std::string&);                      \
+  template Handle create_series<T>(hid_t, const std::string&, const std::vector<hsize_t>&,       \
+                                   const std::string&);                                          \
+  template void append<T>(hid_t, hsize_t, const T*, const std::string&, const std::string&);
+SINEW_HDF5_INSTANTIATE(double)
+SINEW_HDF5_INSTANTIATE(float)
+SINEW_HDF5_INSTANTIATE(std::int32_t)
+SINEW_HDF5_INSTANTIATE(std::int64_t)
+SINEW_HDF5_INSTANTIATE(std::uint8_t)
+#undef SINEW_HDF5_INSTANTIATE
+
+}  // namespace sinew::formats::hdf5

@@ -1,0 +1,220 @@
+// The HDF5 layer itself (formats/hdf5_file.hpp): round trips of datasets, strings, series and
+// attributes, and the typed errors for missing objects, wrong dtypes and shapes and broken files,
+// each naming the file and the dataset or attribute path.
+#include "sinew/formats/hdf5_file.hpp"
+
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "sinew/common/error.hpp"
+#include "test_models.hpp"
+
+namespace sinew::formats::hdf5 {
+namespace {
+
+using testing::file_bytes;
+using testing::temp_path;
+
+// The message of the exception E that `f` throws ("" and a failure when none or another type).
+template <typename E, typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "unexpected exception type: " << e.what();
+    return "";
+  }
+  ADD_FAILURE() << "no exception";
+  return "";
+}
+
+#define EXPECT_CONTAINS(text, part) \
+  EXPECT_NE(std::string(text).find(part), std::string::npos) << "in: " << (text)
+
+// A file with one of everything, written through the layer.
+std::string write_sample() {
+  const auto path = temp_path("sample.h5");
+  auto f = create_file(path);
+  set_attribute(f, "format", std::string("sample"), path);
+  set_attribute(f, "label", std::string("utf-8 é"), path, StringKind::variable);
+  set_attribute(f, "empty", std::string(), path);
+  set_attribute(f, "version", std::int64_t{7}, path);
+  set_attribute(f, "small", std::int32_t{-3}, path);
+  set_attribute(f, "scale", 0.25, path);
+  create_group(f, "/data", path);
+  const std::vector<double> xyz{1, 2, 3, 4, 5, 6};
+  write(f, "/data/xyz", {2, 3}, xyz.data(), path);
+  const std::vector<std::int32_t> ids{5, -1, 7};
+  write(f, "/data/ids", {3}, ids.data(), path);
+  const std::vector<std::int64_t> big{std::int64_t{1} << 40};
+  write(f, "/data/big", {1}, big.data(), path);
+  const std::vector<std::uint8_t> bytes{0, 255};
+  write(f, "/data/bytes", {2}, bytes.data(), path);
+  const std::vector<float> none;
+  write(f, "/data/none", {0, 3}, none.data(), path);
+  const double h = 1e-3;
+  write(f, "/data/h", {}, &h, path);
+  write_strings(f, "/data/names", {"skin", "", "fat"}, path);
+  write_string(f, "/data/note", "one line", path);
+  close_file(f, path);
+  return path;
+}
+
+TEST(Hdf5File, DatasetsRoundTrip) {
+  const auto path = write_sample();
+  auto f = open_checked(path);
+  EXPECT_EQ(read_array<double>(f, "/data/xyz", path, 3), (std::vector<double>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(read_array<std::int32_t>(f, "/data/ids", path), (std::vector<std::int32_t>{5, -1, 7}));
+  EXPECT_EQ(read_array<std::int64_t>(f, "/data/big", path).at(0), std::int64_t{1} << 40);
+  EXPECT_EQ(read_array<std::uint8_t>(f, "/data/bytes", path), (std::vector<std::uint8_t>{0, 255}));
+  EXPECT_TRUE(read_array<float>(f, "/data/none", path, 3).empty());
+  EXPECT_EQ(read_scalar<double>(f, "/data/h", path), 1e-3);
+  EXPECT_EQ(read_strings(f, "/data/names", path), (std::vector<std::string>{"skin", "", "fat"}));
+  EXPECT_EQ(read_string(f, "/data/note", path), "one line");
+  EXPECT_EQ(shape(f, "/data/xyz", path), (std::vector<hsize_t>{2, 3}));
+  EXPECT_TRUE(shape(f, "/data/h", path).empty());
+  // The converting read: any numeric dtype, any shape, optionally an exact count.
+  EXPECT_EQ(read<float>(f, "/data/ids", path), (std::vector<float>{5, -1, 7}));
+  EXPECT_EQ(read<double>(f, "/data/xyz", path, 6).size(), 6u);
+  EXPECT_EQ(members(f, "/data", path).size(), 8u);
+  EXPECT_TRUE(exists(f, "/data/xyz"));
+  EXPECT_FALSE(exists(f, "/data/nothing"));
+  EXPECT_FALSE(exists(f, "/nowhere/at/all"));
+}
+
+TEST(Hdf5File, AttributesRoundTrip) {
+  const auto path = write_sample();
+  auto f = open_file(path, false);
+  EXPECT_EQ(string_attribute(f, "format", path), "sample");
+  EXPECT_EQ(string_attribute(f, "label", path), "utf-8 é");
+  EXPECT_EQ(string_attribute(f, "empty", path), "");
+  EXPECT_EQ(int_attribute(f, "version", path), 7);
+  EXPECT_EQ(int_attribute(f, "small", path), -3);
+  EXPECT_EQ(double_attribute(f, "scale", path), 0.25);
+  EXPECT_EQ(double_attribute(f, "version", path), 7.0);  // an integer is a number
+  EXPECT_TRUE(has_attribute(f, "format"));
+  EXPECT_FALSE(has_attribute(f, "nothing"));
+}
+
+TEST(Hdf5File, OrderedGroupsListInCreationOrder) {
+  const auto path = temp_path("ordered.h5");
+  {
+    auto f = create_file(path);
+    create_group(f, "/sets", path, true);
+    create_group(f, "/plain", path);
+    const std::int32_t one = 1;
+    for (const char* name : {"zeta", "alpha", "mid"}) {
+      write(f, std::string("/sets/") + name, {1}, &one, path);
+      write(f, std::string("/plain/") + name, {1}, &one, path);
+    }
+  }
+  auto f = open_file(path, false);
+  EXPECT_EQ(members(f, "/sets", path), (std::vector<std::string>{"zeta", "alpha", "mid"}));
+  EXPECT_EQ(members(f, "/plain", path), (std::vector<std::string>{"alpha", "mid", "zeta"}));
+}
+
+TEST(Hdf5File, SeriesGrowAndShrink) {
+  const auto path = temp_path("series.h5");
+  {
+    auto f = create_file(path);
+    auto ds = create_series<double>(f, "/x", {2}, path);
+    const double a[2] = {1, 2}, b[2] = {3, 4}, c[2] = {5, 6};
+    append(ds.get(), 0, a, path, "/x");
+    append(ds.get(), 1, b, path, "/x");
+    append(ds.get(), 2, c, path, "/x");
+    flush(f, path);
+    set_frames(ds, 2, path, "/x");
+  }
+  auto f = open_file(path, true);
+  EXPECT_EQ(shape(f, "/x", path), (std::vector<hsize_t>{2, 2}));
+  EXPECT_EQ(read<double>(f, "/x", path), (std::vector<double>{1, 2, 3, 4}));
+}
+
+TEST(Hdf5File, SameDataGiveIdenticalBytes) {
+  const auto first = file_bytes(write_sample());
+  EXPECT_EQ(file_bytes(write_sample()), first);  // no object time stamps
+}
+
+TEST(Hdf5File, MissingObjectsNameTheirPath) {
+  const auto path = write_sample();
+  auto f = open_file(path, false);
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_array<double>(f, "/data/nope", path); }),
+                  path + ": /data/nope: missing dataset");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read<double>(f, "/gone/deeper", path); }),
+                  "/gone/deeper: missing dataset");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { members(f, "/gone", path); }),
+                  "/gone: missing group");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { string_attribute(f, "nothing", path); }),
+                  path + ": /nothing: missing attribute");
+  auto g = open_group(f, "/data", path);
+  EXPECT_CONTAINS(error_of<FormatError>([&] { int_attribute(g, "nothing", path); }),
+                  "/data/nothing: missing attribute");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_array<double>(f, "/data", path); }),
+                  "/data: cannot open, not a dataset");
+}
+
+TEST(Hdf5File, WrongTypesAndShapesAreFormatErrors) {
+  const auto path = write_sample();
+  auto f = open_file(path, false);
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_array<std::int32_t>(f, "/data/xyz", path, 3); }),
+                  "/data/xyz: wrong dtype, expected int32");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_array<std::int64_t>(f, "/data/ids", path); }),
+                  "/data/ids: wrong dtype, expected int64");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_array<std::int32_t>(f, "/data/bytes", path); }),
+                  "/data/bytes: wrong dtype, expected int32");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_array<double>(f, "/data/xyz", path, 8); }),
+                  "/data/xyz: wrong shape (2, 3), expected (n, 8)");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_array<double>(f, "/data/xyz", path); }),
+                  "/data/xyz: wrong shape (2, 3), expected (n)");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_scalar<double>(f, "/data/xyz", path); }),
+                  "/data/xyz: wrong shape (2, 3), expected scalar");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_strings(f, "/data/ids", path); }),
+                  "/data/ids: wrong dtype, expected string");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_string(f, "/data/names", path); }),
+                  "/data/names: wrong shape (3), expected scalar");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read<double>(f, "/data/xyz", path, 5); }),
+                  "/data/xyz: expected 5 values, found 6");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { string_attribute(f, "version", path); }),
+                  "/version: must be one string");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { int_attribute(f, "format", path); }),
+                  "/format: must be one integer");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { double_attribute(f, "format", path); }),
+                  "/format: must be one number");
+}
+
+TEST(Hdf5File, BrokenFilesGiveTypedErrors) {
+  const auto missing = temp_path("missing.h5");
+  EXPECT_CONTAINS(error_of<IoError>([&] { open_checked(missing); }), missing + ": cannot open");
+  EXPECT_CONTAINS(error_of<IoError>([&] { open_file(missing, false); }),
+                  missing + ": cannot open as an HDF5 file");
+  const auto text = temp_path("text.h5");
+  std::ofstream(text) << "not hdf5 at all";
+  EXPECT_FALSE(is_hdf5(text));
+  EXPECT_CONTAINS(error_of<FormatError>([&] { open_checked(text); }), text + ": not an HDF5 file");
+  EXPECT_CONTAINS(error_of<IoError>([&] { create_file("/nonexistent-dir-sinew/x.h5"); }),
+                  "/nonexistent-dir-sinew/x.h5: cannot create the file");
+  // Every truncation of a good file: a typed error or a clean read, never a crash.
+  const auto good = file_bytes(write_sample());
+  const auto cut = temp_path("cut.h5");
+  for (std::size_t n = 0; n < good.size(); n += 97) {
+    std::ofstream(cut, std::ios::binary | std::ios::trunc)
+        .write(good.data(), static_cast<std::streamsize>(n));
+    try {
+      auto f = open_checked(cut);
+      (void)read_array<double>(f, "/data/xyz", cut, 3);
+      (void)read_strings(f, "/data/names", cut);
+      (void)string_attribute(f, "label", cut);
+    } catch (const Error& e) {
+      EXPECT_CONTAINS(e.what(), cut);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace sinew::formats::hdf5
