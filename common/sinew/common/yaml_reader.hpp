@@ -13,6 +13,7 @@
 // Key paths: "key" at the top, "parent.key" below, "list[2]" for list items (0-based). Lines are
 // 1-based and appended to the problem as " (line N)"; a key that is absent has no line.
 // A key whose value is empty (`key:` or `key: ~`) counts as absent (has() is false).
+// YamlNode is a small value: copies share the parsed document, which lives as long as any node.
 #include <array>
 #include <cstddef>
 #include <cstdint>
