@@ -1,63 +1,55 @@
 #include "sinew/simulator/scene.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <set>
-#include <sstream>
-#include <string_view>
 
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/names.hpp"
+#include "sinew/common/yaml_reader.hpp"
 
 namespace sinew::simulator {
 
+namespace {
+
+// The names the scene file uses, for reading and for writing (to_string and friends).
+constexpr NameTable<Effect, 7> kEffectNames{{{"elasticity", Effect::elasticity},
+                                             {"hourglass", Effect::hourglass},
+                                             {"damping", Effect::damping},
+                                             {"gravity", Effect::gravity},
+                                             {"muscles", Effect::muscles},
+                                             {"sliding", Effect::sliding},
+                                             {"loads", Effect::loads}}};
+constexpr NameTable<HourglassModulus, 2> kHourglassModulusNames{
+    {{"shear", HourglassModulus::shear}, {"p_wave", HourglassModulus::p_wave}}};
+constexpr NameTable<Precision, 2> kPrecisionNames{
+    {{"float", Precision::float32}, {"double", Precision::float64}}};
+constexpr NameTable<OutputField, 5> kOutputFieldNames{
+    {{"displacement", OutputField::displacement},
+     {"stress", OutputField::stress},
+     {"J", OutputField::jacobian},
+     {"energy_density", OutputField::energy_density},
+     {"surfaces", OutputField::surfaces}}};
+
+}  // namespace
+
 const char* to_string(Effect effect) {
-  switch (effect) {
-    case Effect::elasticity:
-      return "elasticity";
-    case Effect::hourglass:
-      return "hourglass";
-    case Effect::damping:
-      return "damping";
-    case Effect::gravity:
-      return "gravity";
-    case Effect::muscles:
-      return "muscles";
-    case Effect::sliding:
-      return "sliding";
-    case Effect::loads:
-      return "loads";
-  }
-  return "?";
+  return name_of(kEffectNames, effect);
 }
 
 const char* hourglass_modulus_name(HourglassModulus modulus) {
-  return modulus == HourglassModulus::shear ? "shear" : "p_wave";
+  return name_of(kHourglassModulusNames, modulus);
 }
 
 const char* precision_name(Precision precision) {
-  return precision == Precision::float32 ? "float" : "double";
+  return name_of(kPrecisionNames, precision);
 }
 
 const char* to_string(OutputField field) {
-  switch (field) {
-    case OutputField::displacement:
-      return "displacement";
-    case OutputField::stress:
-      return "stress";
-    case OutputField::jacobian:
-      return "J";
-    case OutputField::energy_density:
-      return "energy_density";
-    case OutputField::surfaces:
-      return "surfaces";
-  }
-  return "?";
+  return name_of(kOutputFieldNames, field);
 }
 
 bool SceneOutput::has(OutputField f) const {
@@ -70,141 +62,15 @@ bool Scene::has(Effect e) const {
 
 namespace {
 
-// A YAML node with its key path, so every check can name the file and the key.
-class Cursor {
- public:
-  Cursor(YAML::Node node, std::string path, const std::string* file)
-      : node_(std::move(node)), path_(std::move(path)), file_(file) {}
-
-  const std::string& path() const { return path_; }
-  bool defined() const { return node_.IsDefined() && !node_.IsNull(); }
-  bool is_map() const { return node_.IsMap(); }
-  bool is_sequence() const { return node_.IsSequence(); }
-  bool is_scalar() const { return node_.IsScalar(); }
-  std::size_t size() const { return node_.size(); }
-
-  ConfigError error(const std::string& problem) const {
-    std::string where;
-    if (node_.IsDefined() && node_.Mark().line >= 0) {
-      where = fmt::format(" (line {})", node_.Mark().line + 1);
-    }
-    return ConfigError(*file_, path_, problem + where);
-  }
-
-  Cursor child(const std::string& key) const {
-    return Cursor(node_[key], path_.empty() ? key : path_ + "." + key, file_);
-  }
-  Cursor item(std::size_t i) const {
-    return Cursor(node_[i], fmt::format("{}[{}]", path_, i), file_);
-  }
-  bool has(const std::string& key) const { return is_map() && child(key).defined(); }
-
-  void expect_map() const {
-    if (!node_.IsMap()) throw error("expected a mapping of keys");
-  }
-  void expect_sequence() const {
-    if (!node_.IsSequence()) throw error("expected a list");
-  }
-  // Every key must be one of `allowed`.
-  void allow_keys(std::initializer_list<std::string_view> allowed) const {
-    expect_map();
-    for (const auto& key : keys()) {
-      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        throw child(key).error(fmt::format("unknown key '{}' (allowed here: {})", key, list));
-      }
-    }
-  }
-  // The keys of a mapping, in file order; a key that is not a plain text or appears twice is an
-  // error (YAML would otherwise keep only one of the two values).
-  std::vector<std::string> keys() const {
-    std::vector<std::string> out;
-    for (const auto& kv : node_) {
-      if (!kv.first.IsScalar()) throw error("keys must be plain names");
-      auto key = kv.first.Scalar();
-      if (std::find(out.begin(), out.end(), key) != out.end()) {
-        throw Cursor(kv.first, path_.empty() ? key : path_ + "." + key, file_)
-            .error(fmt::format("key '{}' given twice", key));
-      }
-      out.push_back(std::move(key));
-    }
-    return out;
-  }
-
-  std::string str() const {
-    if (!node_.IsScalar()) throw error("expected a text value");
-    return node_.Scalar();
-  }
-  double number() const {
-    if (!node_.IsScalar()) throw error("expected a number");
-    double v = 0;
-    try {
-      v = node_.as<double>();
-    } catch (const YAML::Exception&) {
-      throw error(fmt::format("expected a number, got '{}'", node_.Scalar()));
-    }
-    if (!std::isfinite(v))
-      throw error(fmt::format("expected a finite number, got '{}'", node_.Scalar()));
-    return v;
-  }
-  double positive() const {
-    const double v = number();
-    if (!(v > 0)) throw error(fmt::format("must be > 0, got {}", v));
-    return v;
-  }
-  double non_negative() const {
-    const double v = number();
-    if (!(v >= 0)) throw error(fmt::format("must be >= 0, got {}", v));
-    return v;
-  }
-  std::int64_t integer() const {
-    if (!node_.IsScalar()) throw error("expected an integer");
-    try {
-      return node_.as<std::int64_t>();
-    } catch (const YAML::Exception&) {
-      throw error(fmt::format("expected an integer, got '{}'", node_.Scalar()));
-    }
-  }
-  bool boolean() const {
-    if (!node_.IsScalar()) throw error("expected true or false");
-    try {
-      return node_.as<bool>();
-    } catch (const YAML::Exception&) {
-      throw error(fmt::format("expected true or false, got '{}'", node_.Scalar()));
-    }
-  }
-  std::array<double, 3> vec3() const {
-    if (!node_.IsSequence() || node_.size() != 3)
-      throw error("expected a list of 3 numbers [x, y, z]");
-    return {item(0).number(), item(1).number(), item(2).number()};
-  }
-  std::array<double, 3> unit_vec3() const {
-    auto v = vec3();
-    const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (!(n > 0)) throw error("the normal must not be the zero vector");
-    for (auto& c : v) c /= n;
-    return v;
-  }
-
- private:
-  YAML::Node node_;
-  std::string path_;
-  const std::string* file_;
-};
-
-template <typename Enum, std::size_t N>
-Enum choose(const Cursor& c, const std::array<std::pair<const char*, Enum>, N>& options) {
-  const auto s = c.str();
-  std::string list;
-  for (const auto& [name, value] : options) {
-    if (s == name) return value;
-    list += (list.empty() ? "" : ", ") + std::string(name);
-  }
-  throw c.error(fmt::format("unknown value '{}' (expected one of: {})", s, list));
+std::array<double, 3> unit_vec3(const YamlNode& c) {
+  auto v = c.vec3();
+  const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  if (!(n > 0)) throw c.error("the normal must not be the zero vector");
+  for (auto& x : v) x /= n;
+  return v;
 }
 
-void check_monotone(const Cursor& c, const std::vector<std::array<double, 2>>& points) {
+void check_monotone(const YamlNode& c, const std::vector<std::array<double, 2>>& points) {
   // Error text names the offending point; Curve::valid() is the same rule.
   for (std::size_t i = 1; i < points.size(); ++i) {
     if (!(points[i][0] > points[i - 1][0])) {
@@ -216,7 +82,7 @@ void check_monotone(const Cursor& c, const std::vector<std::array<double, 2>>& p
 
 // A curve: a list of [t, value] points, or the ramp/hold/release shorthand, or a single number
 // (constant).
-SceneCurve parse_curve(const Cursor& c) {
+SceneCurve parse_curve(const YamlNode& c) {
   SceneCurve out;
   out.key = c.path();
   auto& curve = out.curve;
@@ -226,8 +92,7 @@ SceneCurve parse_curve(const Cursor& c) {
   }
   if (c.is_sequence()) {
     if (c.size() == 0) throw c.error("a curve needs at least one [t, value] point");
-    for (std::size_t i = 0; i < c.size(); ++i) {
-      const auto p = c.item(i);
+    for (const auto& p : c.items()) {
       if (!p.is_sequence() || p.size() != 2) throw p.error("expected a point [t, value]");
       curve.points.push_back({p.item(0).number(), p.item(1).number()});
     }
@@ -262,25 +127,24 @@ SceneCurve parse_curve(const Cursor& c) {
   return out;
 }
 
-std::array<bool, 3> parse_components(const Cursor& c) {
+std::array<bool, 3> parse_components(const YamlNode& c) {
   std::array<bool, 3> out{false, false, false};
-  const auto one = [&](const Cursor& s) {
-    const auto comp =
-        choose(s, std::array<std::pair<const char*, int>, 3>{{{"x", 0}, {"y", 1}, {"z", 2}}});
+  const auto one = [&](const YamlNode& s) {
+    const auto comp = s.choose(NameTable<int, 3>{{{"x", 0}, {"y", 1}, {"z", 2}}});
     if (out[static_cast<std::size_t>(comp)]) throw s.error("component listed twice");
     out[static_cast<std::size_t>(comp)] = true;
   };
   if (c.is_scalar()) {
     one(c);
   } else {
-    c.expect_sequence();
-    if (c.size() == 0) throw c.error("list at least one component (x, y, z)");
-    for (std::size_t i = 0; i < c.size(); ++i) one(c.item(i));
+    const auto items = c.items();
+    if (items.empty()) throw c.error("list at least one component (x, y, z)");
+    for (const auto& item : items) one(item);
   }
   return out;
 }
 
-std::string check_name(const Cursor& c, const std::string& s) {
+std::string check_name(const YamlNode& c, const std::string& s) {
   if (s.empty()) throw c.error("the name must not be empty");
   for (char ch : s) {
     if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.')) {
@@ -290,41 +154,38 @@ std::string check_name(const Cursor& c, const std::string& s) {
   return s;
 }
 
-std::string parse_name(const Cursor& c) {
-  return check_name(c, c.str());
+std::string parse_name(const YamlNode& c) {
+  return check_name(c, c.text());
 }
 
-void parse_time_step(const Cursor& c, Scene& scene) {
+void parse_time_step(const YamlNode& c, Scene& scene) {
   auto& ts = scene.time_step;
   if (c.is_scalar()) {
-    if (c.str() == "auto") return;
+    if (c.text() == "auto") return;
     ts.automatic = false;
     ts.value = c.positive();
     return;
   }
   c.allow_keys({"mode", "safety_factor", "value", "force"});
-  const auto mode =
-      c.has("mode") ? c.child("mode").str() : std::string(c.has("value") ? "fixed" : "auto");
+  const bool automatic =
+      c.has("mode") ? c.child("mode").choose(NameTable<bool, 2>{{{"auto", true}, {"fixed", false}}})
+                    : !c.has("value");
   if (c.has("safety_factor")) {
     ts.safety_factor = c.child("safety_factor").positive();
     if (*ts.safety_factor > 1) throw c.child("safety_factor").error("must be in (0, 1]");
   }
-  if (mode == "auto") {
+  if (automatic) {
     if (c.has("value")) throw c.child("value").error("'value' needs mode: fixed");
     if (c.has("force")) throw c.child("force").error("'force' only applies to mode: fixed");
-  } else if (mode == "fixed") {
+  } else {
     if (!c.has("value")) throw c.error("mode: fixed needs 'value' (s)");
     ts.automatic = false;
     ts.value = c.child("value").positive();
     if (c.has("force")) ts.force = c.child("force").boolean();
-  } else {
-    throw c.child("mode").error(
-        fmt::format("unknown value '{}' (expected one of: auto, fixed)", mode));
   }
 }
 
-void parse_node_sets(const Cursor& c, Scene& scene) {
-  c.expect_map();
+void parse_node_sets(const YamlNode& c, Scene& scene) {
   for (const auto& name : c.keys()) {
     const auto s = c.child(name);
     SceneNodeSet set;
@@ -340,7 +201,7 @@ void parse_node_sets(const Cursor& c, Scene& scene) {
       throw s.child("tolerance").error("'tolerance' only applies to a plane");
     if (s.has("model")) {
       set.kind = SceneNodeSet::Kind::model;
-      set.model_set = s.child("model").str();
+      set.model_set = s.child("model").text();
     } else if (s.has("box")) {
       set.kind = SceneNodeSet::Kind::box;
       const auto b = s.child("box");
@@ -360,16 +221,16 @@ void parse_node_sets(const Cursor& c, Scene& scene) {
       if (!p.has("point") || !p.has("normal"))
         throw p.error("a plane needs 'point' (m) and 'normal'");
       set.point = p.child("point").vec3();
-      set.normal = p.child("normal").unit_vec3();
+      set.normal = unit_vec3(p.child("normal"));
       if (s.has("tolerance")) set.tolerance = s.child("tolerance").positive();
     } else {
       set.kind = SceneNodeSet::Kind::nodes;
       const auto n = s.child("nodes");
-      n.expect_sequence();
-      if (n.size() == 0) throw n.error("list at least one node id");
-      for (std::size_t i = 0; i < n.size(); ++i) {
-        const auto id = n.item(i).integer();
-        if (id < 0) throw n.item(i).error("node ids are >= 0");
+      const auto items = n.items();
+      if (items.empty()) throw n.error("list at least one node id");
+      for (const auto& item : items) {
+        const auto id = item.integer();
+        if (id < 0) throw item.error("node ids are >= 0");
         set.ids.push_back(id);
       }
     }
@@ -377,17 +238,15 @@ void parse_node_sets(const Cursor& c, Scene& scene) {
   }
 }
 
-void parse_boundary(const Cursor& c, Scene& scene) {
-  c.expect_sequence();
-  for (std::size_t i = 0; i < c.size(); ++i) {
-    const auto b = c.item(i);
+void parse_boundary(const YamlNode& c, Scene& scene) {
+  for (const auto& b : c.items()) {
     b.expect_map();
     if (!b.has("type"))
       throw b.error("each boundary condition needs 'type' (fixed, plane, displacement, force)");
     SceneBoundary bc;
     bc.key = b.path();
-    bc.kind = choose(b.child("type"), std::array<std::pair<const char*, SceneBoundary::Kind>, 4>{
-                                          {{"fixed", SceneBoundary::Kind::fixed},
+    bc.kind = b.child("type").choose(
+        NameTable<SceneBoundary::Kind, 4>{{{"fixed", SceneBoundary::Kind::fixed},
                                            {"plane", SceneBoundary::Kind::plane},
                                            {"displacement", SceneBoundary::Kind::displacement},
                                            {"force", SceneBoundary::Kind::force}}});
@@ -406,11 +265,11 @@ void parse_boundary(const Cursor& c, Scene& scene) {
         break;
     }
     if (!b.has("set")) throw b.error("needs 'set' (a node set name, or 'all')");
-    bc.set = b.child("set").str();
+    bc.set = b.child("set").text();
     if (b.has("components")) bc.components = parse_components(b.child("components"));
     if (bc.kind == SceneBoundary::Kind::plane) {
       if (!b.has("normal")) throw b.error("a plane condition needs 'normal'");
-      bc.normal = b.child("normal").unit_vec3();
+      bc.normal = unit_vec3(b.child("normal"));
     }
     if (bc.kind == SceneBoundary::Kind::displacement || bc.kind == SceneBoundary::Kind::force) {
       if (!b.has("value"))
@@ -427,49 +286,39 @@ void parse_boundary(const Cursor& c, Scene& scene) {
   }
 }
 
-void parse_initial_velocity(const Cursor& c, Scene& scene) {
+void parse_initial_velocity(const YamlNode& c, Scene& scene) {
   if (c.is_sequence() && c.size() == 3 && c.item(0).is_scalar()) {
     scene.initial_velocity.push_back({"all", c.vec3(), c.path()});
     return;
   }
-  c.expect_sequence();
-  for (std::size_t i = 0; i < c.size(); ++i) {
-    const auto v = c.item(i);
+  for (const auto& v : c.items()) {
     v.allow_keys({"set", "value"});
     if (!v.has("set") || !v.has("value"))
       throw v.error("needs 'set' and 'value' [vx, vy, vz] (m/s)");
-    scene.initial_velocity.push_back({v.child("set").str(), v.child("value").vec3(), v.path()});
+    scene.initial_velocity.push_back({v.child("set").text(), v.child("value").vec3(), v.path()});
   }
 }
 
-void parse_output(const Cursor& c, Scene& scene) {
+void parse_output(const YamlNode& c, Scene& scene) {
   c.allow_keys({"interval", "fields", "probe_interval"});
   auto& out = scene.output;
   if (c.has("interval")) out.interval = c.child("interval").non_negative();
   if (c.has("probe_interval")) out.probe_interval = c.child("probe_interval").positive();
   if (c.has("fields")) {
     const auto f = c.child("fields");
-    f.expect_sequence();
     out.fields = {OutputField::displacement};
-    for (std::size_t i = 0; i < f.size(); ++i) {
-      const auto field = choose(f.item(i), std::array<std::pair<const char*, OutputField>, 5>{
-                                               {{"displacement", OutputField::displacement},
-                                                {"stress", OutputField::stress},
-                                                {"J", OutputField::jacobian},
-                                                {"energy_density", OutputField::energy_density},
-                                                {"surfaces", OutputField::surfaces}}});
+    for (const auto& item : f.items()) {
+      const auto field = item.choose(kOutputFieldNames);
       if (field == OutputField::displacement) continue;
-      if (out.has(field)) throw f.item(i).error("field listed twice");
+      if (out.has(field)) throw item.error("field listed twice");
       out.fields.push_back(field);
     }
   }
 }
 
-void parse_probes(const Cursor& c, Scene& scene) {
-  c.expect_sequence();
+void parse_probes(const YamlNode& c, Scene& scene) {
   std::set<std::string> names;
-  for (std::size_t i = 0; i < c.size(); ++i) {
-    const auto p = c.item(i);
+  for (const auto& p : c.items()) {
     p.expect_map();
     SceneProbe probe;
     probe.key = p.path();
@@ -478,9 +327,9 @@ void parse_probes(const Cursor& c, Scene& scene) {
     probe.name = parse_name(p.child("name"));
     if (!names.insert(probe.name).second)
       throw p.child("name").error(fmt::format("probe name '{}' used twice", probe.name));
-    probe.kind = choose(p.child("type"), std::array<std::pair<const char*, SceneProbe::Kind>, 2>{
-                                             {{"displacement", SceneProbe::Kind::displacement},
-                                              {"reaction", SceneProbe::Kind::reaction}}});
+    probe.kind = p.child("type").choose(
+        NameTable<SceneProbe::Kind, 2>{{{"displacement", SceneProbe::Kind::displacement},
+                                        {"reaction", SceneProbe::Kind::reaction}}});
     if (probe.kind == SceneProbe::Kind::displacement) {
       p.allow_keys({"name", "type", "node", "point"});
       if (p.has("node") == p.has("point"))
@@ -494,7 +343,7 @@ void parse_probes(const Cursor& c, Scene& scene) {
     } else {
       p.allow_keys({"name", "type", "set"});
       if (!p.has("set")) throw p.error("a reaction probe needs 'set' (a node set name)");
-      probe.set = p.child("set").str();
+      probe.set = p.child("set").text();
     }
     scene.probes.push_back(std::move(probe));
   }
@@ -502,47 +351,22 @@ void parse_probes(const Cursor& c, Scene& scene) {
 
 }  // namespace
 
-namespace {
-Scene parse_checked(const std::string& text, const std::string& file, const std::string& directory);
-}  // namespace
-
 Scene parse_scene_text(const std::string& text, const std::string& file,
                        const std::string& directory) {
-  try {
-    return parse_checked(text, file, directory);
-  } catch (const YAML::Exception& e) {
-    // Every expected problem is caught where it happens with its key path; this is the net for
-    // YAML shapes nobody anticipated.
-    throw ConfigError(file, "",
-                      fmt::format("cannot read the scene: {} (line {})", e.msg, e.mark.line + 1));
-  }
-}
-
-namespace {
-Scene parse_checked(const std::string& text, const std::string& file,
-                    const std::string& directory) {
   Scene scene;
   scene.file = file;
   scene.directory = directory;
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError(file, "",
-                      fmt::format("not valid YAML: {} (line {}, column {})", e.msg, e.mark.line + 1,
-                                  e.mark.column + 1));
-  }
-  const Cursor c(root, "", &scene.file);
-  if (!root.IsMap())
+  const YamlNode c = parse_yaml(text, file);
+  if (!c.is_map())
     throw ConfigError(file, "", "a scene is a mapping of keys (model:, effects:, duration:, ...)");
   c.allow_keys({"title", "model", "effects", "duration", "time_step", "damping", "mass_scaling",
                 "time_scaling", "hourglass", "precision", "gravity", "muscles", "node_sets",
                 "boundary_conditions", "initial_velocity", "output", "probes"});
 
-  if (c.has("title")) scene.title = c.child("title").str();
+  if (c.has("title")) scene.title = c.child("title").text();
   if (!c.has("model"))
     throw ConfigError(file, "model", "missing: the model file (path relative to the scene file)");
-  scene.model = c.child("model").str();
+  scene.model = c.child("model").text();
   if (scene.model.empty()) throw c.child("model").error("the model path must not be empty");
   {
     const std::filesystem::path p(scene.model);
@@ -558,14 +382,10 @@ Scene parse_checked(const std::string& text, const std::string& file,
   }
   {
     const auto e = c.child("effects");
-    e.expect_sequence();
-    for (std::size_t i = 0; i < e.size(); ++i) {
-      std::array<std::pair<const char*, Effect>, 7> options{};
-      for (std::size_t k = 0; k < kAllEffects.size(); ++k)
-        options[k] = {to_string(kAllEffects[k]), kAllEffects[k]};
-      const auto effect = choose(e.item(i), options);
+    for (const auto& item : e.items()) {
+      const auto effect = item.choose(kEffectNames);
       if (scene.has(effect))
-        throw e.item(i).error(fmt::format("effect '{}' listed twice", to_string(effect)));
+        throw item.error(fmt::format("effect '{}' listed twice", to_string(effect)));
       scene.effects.push_back(effect);
     }
     if (!scene.has(Effect::elasticity)) {
@@ -605,17 +425,11 @@ Scene parse_checked(const std::string& text, const std::string& file,
       throw h.error("'hourglass' is given but 'hourglass' is not in effects");
     h.allow_keys({"kappa", "modulus"});
     if (h.has("kappa")) scene.hourglass.kappa = h.child("kappa").positive();
-    if (h.has("modulus")) {
-      scene.hourglass.modulus =
-          choose(h.child("modulus"),
-                 std::array<std::pair<const char*, HourglassModulus>, 2>{
-                     {{"shear", HourglassModulus::shear}, {"p_wave", HourglassModulus::p_wave}}});
-    }
+    if (h.has("modulus"))
+      scene.hourglass.modulus = h.child("modulus").choose(kHourglassModulusNames);
   }
   if (c.has("precision")) {
-    scene.precision = choose(c.child("precision"),
-                             std::array<std::pair<const char*, Precision>, 2>{
-                                 {{"float", Precision::float32}, {"double", Precision::float64}}});
+    scene.precision = c.child("precision").choose(kPrecisionNames);
   }
   if (c.has("gravity")) {
     if (!scene.has(Effect::gravity))
@@ -626,7 +440,6 @@ Scene parse_checked(const std::string& text, const std::string& file,
     const auto m = c.child("muscles");
     if (!scene.has(Effect::muscles))
       throw m.error("activation curves are given but 'muscles' is not in effects");
-    m.expect_map();
     for (const auto& name : m.keys()) {
       const auto a = m.child(name);
       SceneActivation act;
@@ -648,15 +461,10 @@ Scene parse_checked(const std::string& text, const std::string& file,
   if (c.has("probes")) parse_probes(c.child("probes"), scene);
   return scene;
 }
-}  // namespace
 
 Scene parse_scene(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, "", "cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const auto dir = std::filesystem::path(path).parent_path().string();
-  return parse_scene_text(ss.str(), path, dir);
+  const auto text = read_text_file(path, "scene file");
+  return parse_scene_text(text, path, std::filesystem::path(path).parent_path().string());
 }
 
 }  // namespace sinew::simulator

@@ -8,7 +8,8 @@
 //  2. resolve_scene checks the Scene against a Model (node sets and muscles exist, probes lie on
 //     the model) and produces the engine's Setup with node ids (setup.hpp).
 // Every error is a ConfigError naming the scene file and the key path, e.g.
-//   "box.yaml: boundary_conditions[2].set: unknown node set 'topp' (scene sets: top, bottom; ...)".
+//   "box.yaml: boundary_conditions[2].set: unknown node set 'topp' (scene sets: top, bottom; ...)",
+// and, for what parse_scene finds, the line (the YAML is read by common's yaml_reader.hpp).
 // SI units throughout: metres, seconds, newtons, pascals.
 #include <array>
 #include <cstdint>

@@ -1,185 +1,40 @@
 #include "sinew/voxelizer/spec.hpp"
 
-#include <yaml-cpp/yaml.h>
-
-#include <cmath>
-#include <fstream>
-#include <functional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <string_view>
+#include <tuple>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/names.hpp"
+#include "sinew/common/yaml_reader.hpp"
 
 namespace sinew::voxelizer {
 
 namespace {
 
-// Reading context: the file name for messages and the unit of lengths.
-struct Reader {
-  std::string file;
+constexpr NameTable<LengthUnit, 3> kLengthUnitNames{
+    {{"m", LengthUnit::m}, {"cm", LengthUnit::cm}, {"mm", LengthUnit::mm}}};
+
+// The spec's own reading rules on top of the shared YAML reader: lengths in the spec's unit, mesh
+// paths relative to the spec's folder, and the composite values (meshes, boxes, selectors).
+struct SpecReader {
   std::filesystem::path folder;
   LengthUnit units = LengthUnit::m;
 
-  [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
-    throw ConfigError(file, field, problem);
-  }
-
-  void check_keys(const YAML::Node& node, const std::string& field,
-                  const std::set<std::string>& allowed) const {
-    if (!node.IsMap()) fail(field, "expected a map");
-    for (const auto& kv : node) {
-      const std::string key = kv.first.as<std::string>();
-      if (!allowed.count(key)) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        fail(join(field, key), "unknown key (allowed here: " + list + ")");
-      }
-    }
-  }
-
-  static std::string join(const std::string& field, const std::string& key) {
-    return field.empty() ? key : field + "." + key;
-  }
-  static std::string at(const std::string& field, std::size_t i) {
-    return field + "[" + std::to_string(i) + "]";
-  }
-
-  double number(const YAML::Node& n, const std::string& field) const {
-    if (!n.IsScalar()) fail(field, "expected a number");
-    double v = 0;
-    try {
-      v = n.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(field, "expected a number, got '" + n.Scalar() + "'");
-    }
-    if (!std::isfinite(v)) fail(field, "must be finite, got '" + n.Scalar() + "'");
-    return v;
-  }
-  double positive(const YAML::Node& n, const std::string& field) const {
-    const double v = number(n, field);
-    if (!(v > 0)) fail(field, "must be > 0, got " + n.Scalar());
-    return v;
+  // A name or a path: text that must not be empty.
+  static std::string name(const YamlNode& n) {
+    if (!n.is_scalar() || n.text().empty()) throw n.error("expected a non-empty string");
+    return n.text();
   }
   // A length in the spec's unit, returned in metres.
-  double length(const YAML::Node& n, const std::string& field) const {
-    return positive(n, field) * metres_per_unit(units);
+  double length(const YamlNode& n) const { return n.positive() * metres_per_unit(units); }
+  static Vec3d vec3(const YamlNode& n, double scale = 1.0) {
+    const auto v = n.vec3();
+    return {v[0] * scale, v[1] * scale, v[2] * scale};
   }
-  std::int64_t integer(const YAML::Node& n, const std::string& field) const {
-    if (!n.IsScalar()) fail(field, "expected an integer");
-    try {
-      return n.as<std::int64_t>();
-    } catch (const YAML::Exception&) {
-      fail(field, "expected an integer, got '" + n.Scalar() + "'");
-    }
-  }
-  std::string text(const YAML::Node& n, const std::string& field) const {
-    if (!n.IsScalar() || n.Scalar().empty()) fail(field, "expected a non-empty string");
-    return n.Scalar();
-  }
-  bool boolean(const YAML::Node& n, const std::string& field) const {
-    if (!n.IsScalar()) fail(field, "expected true or false");
-    try {
-      return n.as<bool>();
-    } catch (const YAML::Exception&) {
-      fail(field, "expected true or false, got '" + n.Scalar() + "'");
-    }
-  }
-  Vec3d vec3(const YAML::Node& n, const std::string& field, double scale = 1.0) const {
-    if (!n.IsSequence() || n.size() != 3) fail(field, "expected a list of 3 numbers");
-    return {number(n[0], at(field, 0)) * scale, number(n[1], at(field, 1)) * scale,
-            number(n[2], at(field, 2)) * scale};
-  }
-  const YAML::Node sequence(const YAML::Node& n, const std::string& field) const {
-    if (!n.IsSequence()) fail(field, "expected a list");
-    return n;
-  }
-
-  Box box(const YAML::Node& n, const std::string& field) const {
-    check_keys(n, field, {"min", "max"});
-    if (!n["min"] || !n["max"]) fail(field, "a box needs both min and max");
-    const double s = metres_per_unit(units);
-    Box b{vec3(n["min"], join(field, "min"), s), vec3(n["max"], join(field, "max"), s)};
-    if (!(b.lo.x < b.hi.x && b.lo.y < b.hi.y && b.lo.z < b.hi.z)) {
-      fail(field, "min must be smaller than max in x, y and z");
-    }
-    return b;
-  }
-
-  MeshSource mesh(const YAML::Node& n, const std::string& field) const {
-    MeshSource m;
-    m.field = field;
-    m.transform.unit = units;
-    if (n.IsScalar()) {
-      m.path = resolve(text(n, field));
-      return m;
-    }
-    check_keys(n, field,
-               {"path", "sphere", "ellipsoid", "box", "cylinder", "subdivisions", "unit", "scale",
-                "rotate_deg", "translate"});
-    int sources = 0;
-    for (const char* k : {"path", "sphere", "ellipsoid", "box", "cylinder"})
-      sources += n[k] ? 1 : 0;
-    if (sources != 1) fail(field, "give exactly one of path, sphere, ellipsoid, box, cylinder");
-    if (n["unit"]) m.transform.unit = parse_unit(n["unit"], join(field, "unit"));
-    if (n["path"]) {
-      m.path = resolve(text(n["path"], join(field, "path")));
-    } else if (const auto s = n["sphere"]) {
-      const std::string f = join(field, "sphere");
-      check_keys(s, f, {"centre", "radius"});
-      m.kind = MeshSource::Kind::sphere;
-      if (s["centre"]) m.centre = vec3(s["centre"], join(f, "centre"));
-      if (!s["radius"]) fail(f, "missing key 'radius'");
-      const double r = positive(s["radius"], join(f, "radius"));
-      m.radii = {r, r, r};
-    } else if (const auto e = n["ellipsoid"]) {
-      const std::string f = join(field, "ellipsoid");
-      check_keys(e, f, {"centre", "radii"});
-      m.kind = MeshSource::Kind::ellipsoid;
-      if (e["centre"]) m.centre = vec3(e["centre"], join(f, "centre"));
-      if (!e["radii"]) fail(f, "missing key 'radii'");
-      m.radii = vec3(e["radii"], join(f, "radii"));
-      if (!(m.radii.x > 0 && m.radii.y > 0 && m.radii.z > 0)) fail(f, "radii must be > 0");
-    } else if (const auto b = n["box"]) {
-      const std::string f = join(field, "box");
-      check_keys(b, f, {"min", "max"});
-      m.kind = MeshSource::Kind::box;
-      if (!b["min"] || !b["max"]) fail(f, "a box needs both min and max");
-      m.box_lo = vec3(b["min"], join(f, "min"));
-      m.box_hi = vec3(b["max"], join(f, "max"));
-      if (!(m.box_lo.x < m.box_hi.x && m.box_lo.y < m.box_hi.y && m.box_lo.z < m.box_hi.z)) {
-        fail(f, "min must be smaller than max in x, y and z");
-      }
-    } else if (const auto c = n["cylinder"]) {
-      const std::string f = join(field, "cylinder");
-      check_keys(c, f, {"centre", "radius", "half_length"});
-      m.kind = MeshSource::Kind::cylinder;
-      if (c["centre"]) m.centre = vec3(c["centre"], join(f, "centre"));
-      if (!c["radius"] || !c["half_length"]) fail(f, "needs radius and half_length");
-      m.radii = {positive(c["radius"], join(f, "radius")),
-                 positive(c["half_length"], join(f, "half_length")), 0};
-    }
-    if (n["subdivisions"]) {
-      const auto s = integer(n["subdivisions"], join(field, "subdivisions"));
-      if (s < 0 || s > 8) fail(join(field, "subdivisions"), "must be in [0, 8]");
-      m.subdivisions = static_cast<int>(s);
-    }
-    if (n["scale"]) m.transform.scale = positive(n["scale"], join(field, "scale"));
-    if (n["rotate_deg"]) m.transform.rotate_deg = vec3(n["rotate_deg"], join(field, "rotate_deg"));
-    if (n["translate"]) {
-      m.transform.translate =
-          vec3(n["translate"], join(field, "translate"), metres_per_unit(m.transform.unit));
-    }
-    return m;
-  }
-
-  LengthUnit parse_unit(const YAML::Node& n, const std::string& field) const {
-    const std::string u = text(n, field);
-    if (u == "m") return LengthUnit::m;
-    if (u == "cm") return LengthUnit::cm;
-    if (u == "mm") return LengthUnit::mm;
-    fail(field, "unknown unit '" + u + "' (known: m, cm, mm)");
-  }
+  static LengthUnit unit(const YamlNode& n) { return n.choose(kLengthUnitNames, "unit"); }
 
   std::filesystem::path resolve(const std::string& p) const {
     std::filesystem::path path(p);
@@ -187,35 +42,115 @@ struct Reader {
     return path.lexically_normal();
   }
 
-  SurfaceRef surface(const YAML::Node& n, const std::string& field) const {
-    SurfaceRef r;
-    r.field = field;
-    if (n.IsScalar()) {
-      r.name = text(n, field);
+  // {min: [x, y, z], max: [x, y, z]} times `scale`, min < max in every axis.
+  static std::pair<Vec3d, Vec3d> corners(const YamlNode& n, double scale) {
+    n.allow_keys({"min", "max"});
+    if (!n.has("min") || !n.has("max")) throw n.error("a box needs both min and max");
+    const Vec3d lo = vec3(n.child("min"), scale), hi = vec3(n.child("max"), scale);
+    if (!(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z)) {
+      throw n.error("min must be smaller than max in x, y and z");
+    }
+    return {lo, hi};
+  }
+  Box box(const YamlNode& n) const {
+    const auto [lo, hi] = corners(n, metres_per_unit(units));
+    return Box{lo, hi};
+  }
+
+  MeshSource mesh(const YamlNode& n) const {
+    MeshSource m;
+    m.field = n.path();
+    m.transform.unit = units;
+    if (n.is_scalar()) {
+      m.path = resolve(name(n));
+      return m;
+    }
+    n.allow_keys({"path", "sphere", "ellipsoid", "box", "cylinder", "subdivisions", "unit", "scale",
+                  "rotate_deg", "translate"});
+    int sources = 0;
+    for (const char* k : {"path", "sphere", "ellipsoid", "box", "cylinder"})
+      sources += n.has(k) ? 1 : 0;
+    if (sources != 1) throw n.error("give exactly one of path, sphere, ellipsoid, box, cylinder");
+    if (n.has("unit")) m.transform.unit = unit(n.child("unit"));
+    if (n.has("path")) {
+      m.path = resolve(name(n.child("path")));
+    } else if (n.has("sphere") || n.has("ellipsoid")) {
+      // A sphere is an ellipsoid given by one radius.
+      const bool sphere = n.has("sphere");
+      const auto e = n.child(sphere ? "sphere" : "ellipsoid");
+      e.allow_keys({"centre", sphere ? "radius" : "radii"});
+      m.kind = sphere ? MeshSource::Kind::sphere : MeshSource::Kind::ellipsoid;
+      if (e.has("centre")) m.centre = vec3(e.child("centre"));
+      if (sphere) {
+        const double r = e.require("radius").positive();
+        m.radii = {r, r, r};
+      } else {
+        m.radii = vec3(e.require("radii"));
+        if (!(m.radii.x > 0 && m.radii.y > 0 && m.radii.z > 0)) throw e.error("radii must be > 0");
+      }
+    } else if (n.has("box")) {
+      m.kind = MeshSource::Kind::box;
+      std::tie(m.box_lo, m.box_hi) = corners(n.child("box"), 1.0);
     } else {
-      r.mesh = mesh(n, field);
+      const auto c = n.child("cylinder");
+      c.allow_keys({"centre", "radius", "half_length"});
+      m.kind = MeshSource::Kind::cylinder;
+      if (c.has("centre")) m.centre = vec3(c.child("centre"));
+      if (!c.has("radius") || !c.has("half_length")) throw c.error("needs radius and half_length");
+      m.radii = {c.child("radius").positive(), c.child("half_length").positive(), 0};
+    }
+    if (n.has("subdivisions")) {
+      const auto s = n.child("subdivisions");
+      const auto v = s.integer();
+      if (v < 0 || v > 8) throw s.error("must be in [0, 8]");
+      m.subdivisions = static_cast<int>(v);
+    }
+    if (n.has("scale")) m.transform.scale = n.child("scale").positive();
+    if (n.has("rotate_deg")) m.transform.rotate_deg = vec3(n.child("rotate_deg"));
+    if (n.has("translate")) {
+      m.transform.translate = vec3(n.child("translate"), metres_per_unit(m.transform.unit));
+    }
+    return m;
+  }
+
+  SurfaceRef surface(const YamlNode& n) const {
+    SurfaceRef r;
+    r.field = n.path();
+    if (n.is_scalar()) {
+      r.name = name(n);
+    } else {
+      r.mesh = mesh(n);
     }
     return r;
   }
 
-  Selector selector(const YAML::Node& n, const std::string& field) const {
-    check_keys(n, field, {"box", "surface", "distance"});
+  // A selector's keys (box, surface, distance), and `name` too when the selector is named.
+  Selector selector(const YamlNode& n, bool named = false) const {
+    std::vector<std::string_view> keys{"box", "surface", "distance"};
+    if (named) keys.insert(keys.begin(), "name");
+    n.allow_keys(keys);
     Selector s;
-    s.field = field;
-    if (n["box"]) s.box = box(n["box"], join(field, "box"));
-    if (n["surface"]) {
-      s.surface = surface(n["surface"], join(field, "surface"));
-      if (!n["distance"]) fail(field, "a surface selector needs a distance");
-      s.distance = length(n["distance"], join(field, "distance"));
-    } else if (n["distance"]) {
-      fail(join(field, "distance"), "distance needs a surface");
+    s.field = n.path();
+    if (n.has("box")) s.box = box(n.child("box"));
+    if (n.has("surface")) {
+      s.surface = surface(n.child("surface"));
+      if (!n.has("distance")) throw n.error("a surface selector needs a distance");
+      s.distance = length(n.child("distance"));
+    } else if (n.has("distance")) {
+      throw n.child("distance").error("distance needs a surface");
     }
-    if (!s.box && !s.surface) fail(field, "give a box, a surface with a distance, or both");
+    if (!s.box && !s.surface) throw n.error("give a box, a surface with a distance, or both");
     return s;
   }
 };
 
-void check_surface_names(const Reader& r, const Spec& spec) {
+std::string list_of(const std::set<std::string>& names) {
+  std::string list;
+  for (const auto& n : names) list.append(list.empty() ? "" : ", ").append(n);
+  return list;
+}
+
+void check_surface_names(const Spec& spec) {
   std::set<std::string> known{"outer"};
   if (spec.inner || spec.tissue_thickness) known.insert("inner");
   for (const auto& m : spec.muscles) known.insert(m.name);
@@ -223,26 +158,29 @@ void check_surface_names(const Reader& r, const Spec& spec) {
     if (t.mesh) known.insert(t.name);
   for (const auto& g : spec.regions)
     if (g.mesh) known.insert(g.name);
-  auto check = [&](const SurfaceRef& ref) {
+  for_each_surface_ref(spec, [&](const SurfaceRef& ref) {
     if (ref.mesh || known.count(ref.name)) return;
-    std::string list;
-    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-    r.fail(ref.field, "unknown surface or muscle name '" + ref.name + "' (known: " + list + ")");
-  };
-  for (const auto& m : spec.muscles) {
-    if (m.fibres.kind == FibreSpec::Kind::harmonic) {
-      if (m.fibres.origin.surface) check(*m.fibres.origin.surface);
-      if (m.fibres.insertion.surface) check(*m.fibres.insertion.surface);
-    }
-  }
-  for (const auto& b : spec.boundary)
-    if (b.has_surface) check(b.surface);
-  for (const auto& s : spec.node_sets)
-    if (s.select.surface) check(*s.select.surface);
-  for (const auto& v : spec.visual) check(v.surface);
+    throw ConfigError(
+        spec.file.string(), ref.field,
+        "unknown surface or muscle name '" + ref.name + "' (known: " + list_of(known) + ")");
+  });
 }
 
 }  // namespace
+
+void for_each_surface_ref(const Spec& spec, const std::function<void(const SurfaceRef&)>& visit) {
+  for (const auto& m : spec.muscles) {
+    if (m.fibres.kind == FibreSpec::Kind::harmonic) {
+      if (m.fibres.origin.surface) visit(*m.fibres.origin.surface);
+      if (m.fibres.insertion.surface) visit(*m.fibres.insertion.surface);
+    }
+  }
+  for (const auto& b : spec.boundary)
+    if (b.has_surface) visit(b.surface);
+  for (const auto& s : spec.node_sets)
+    if (s.select.surface) visit(*s.select.surface);
+  for (const auto& v : spec.visual) visit(v.surface);
+}
 
 std::string MeshSource::describe() const {
   std::ostringstream os;
@@ -281,102 +219,81 @@ const MaterialSpec* Spec::find_material(const std::string& name) const {
 }
 
 Spec read_spec(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw IoError(path.string(), "", "cannot open the spec file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw IoError(path.string(), "", "cannot read the spec file");
-  return parse_spec(ss.str(), path);
+  return parse_spec(read_text_file(path, "spec file"), path);
 }
 
 Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file) {
-  Reader r;
-  r.file = file.string();
+  SpecReader r;
   r.folder = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(r.file, "", std::string("YAML syntax error: ") + e.what());
-  }
-  if (!root.IsMap()) r.fail("", "the spec must be a YAML map");
-  r.check_keys(
-      root, "",
-      {"units", "output", "resolution", "weld_tolerance", "outer", "inner", "tissue_thickness",
-       "layers", "materials", "muscles", "tendons", "regions", "boundary", "node_sets", "visual"});
+  const YamlNode root = parse_yaml(yaml_text, file.string());
+  if (!root.is_map()) throw root.error("the spec must be a YAML map");
+  root.allow_keys({"units", "output", "resolution", "weld_tolerance", "outer", "inner",
+                   "tissue_thickness", "layers", "materials", "muscles", "tendons", "regions",
+                   "boundary", "node_sets", "visual"});
   Spec spec;
   spec.file = file;
-  if (root["units"]) r.units = r.parse_unit(root["units"], "units");
+  if (root.has("units")) r.units = SpecReader::unit(root.child("units"));
   spec.units = r.units;
-  if (root["output"]) spec.output = r.resolve(r.text(root["output"], "output"));
+  if (root.has("output")) spec.output = r.resolve(SpecReader::name(root.child("output")));
 
   // Resolution.
-  if (!root["resolution"]) r.fail("resolution", "missing (give voxel_size or target_elements)");
   {
-    const auto n = root["resolution"];
-    r.check_keys(n, "resolution",
-                 {"voxel_size", "target_elements", "max_subdivision", "min_fraction"});
-    if (n["voxel_size"]) spec.voxel_size = r.length(n["voxel_size"], "resolution.voxel_size");
-    if (n["target_elements"]) {
-      spec.target_elements = r.integer(n["target_elements"], "resolution.target_elements");
-      if (*spec.target_elements < 1) r.fail("resolution.target_elements", "must be >= 1");
+    const auto n = root.child("resolution");
+    if (!n.defined()) throw n.error("missing (give voxel_size or target_elements)");
+    n.allow_keys({"voxel_size", "target_elements", "max_subdivision", "min_fraction"});
+    if (n.has("voxel_size")) spec.voxel_size = r.length(n.child("voxel_size"));
+    if (n.has("target_elements")) {
+      spec.target_elements = n.child("target_elements").integer();
+      if (*spec.target_elements < 1) throw n.child("target_elements").error("must be >= 1");
     }
     if (spec.voxel_size.has_value() == spec.target_elements.has_value()) {
-      r.fail("resolution", "give exactly one of voxel_size and target_elements");
+      throw n.error("give exactly one of voxel_size and target_elements");
     }
-    if (n["max_subdivision"]) {
-      const auto l = r.integer(n["max_subdivision"], "resolution.max_subdivision");
-      if (l < 0 || l > 6) r.fail("resolution.max_subdivision", "must be in [0, 6]");
+    if (n.has("max_subdivision")) {
+      const auto l = n.child("max_subdivision").integer();
+      if (l < 0 || l > 6) throw n.child("max_subdivision").error("must be in [0, 6]");
       spec.max_subdivision = static_cast<int>(l);
     }
-    if (n["min_fraction"]) {
-      spec.min_fraction = r.number(n["min_fraction"], "resolution.min_fraction");
+    if (n.has("min_fraction")) {
+      spec.min_fraction = n.child("min_fraction").number();
       if (spec.min_fraction < 0 || spec.min_fraction >= 1) {
-        r.fail("resolution.min_fraction", "must be in [0, 1)");
+        throw n.child("min_fraction").error("must be in [0, 1)");
       }
     }
   }
-  if (root["weld_tolerance"]) {
-    spec.weld_tolerance =
-        r.number(root["weld_tolerance"], "weld_tolerance") * metres_per_unit(r.units);
-    if (spec.weld_tolerance < 0) r.fail("weld_tolerance", "must be >= 0");
+  if (root.has("weld_tolerance")) {
+    spec.weld_tolerance = root.child("weld_tolerance").non_negative() * metres_per_unit(r.units);
   }
 
   // Surfaces.
-  if (!root["outer"]) r.fail("outer", "missing: the outer surface (skin) mesh");
-  spec.outer = r.mesh(root["outer"], "outer");
-  if (root["inner"]) spec.inner = r.mesh(root["inner"], "inner");
-  if (root["tissue_thickness"]) {
-    spec.tissue_thickness = r.length(root["tissue_thickness"], "tissue_thickness");
-  }
+  if (!root.has("outer")) throw root.child("outer").error("missing: the outer surface (skin) mesh");
+  spec.outer = r.mesh(root.child("outer"));
+  if (root.has("inner")) spec.inner = r.mesh(root.child("inner"));
+  if (root.has("tissue_thickness"))
+    spec.tissue_thickness = r.length(root.child("tissue_thickness"));
   if (spec.inner && spec.tissue_thickness) {
-    r.fail("tissue_thickness", "give either inner or tissue_thickness, not both");
+    throw root.child("tissue_thickness").error("give either inner or tissue_thickness, not both");
   }
 
   // Materials.
-  if (const auto n = root["materials"]) {
-    r.check_keys(n, "materials", {"preset", "table"});
-    if (n["preset"]) {
-      const std::string p = r.text(n["preset"], "materials.preset");
-      if (p != "warburton2013") {
-        r.fail("materials.preset", "unknown preset '" + p + "' (known: warburton2013)");
-      }
-      spec.materials = warburton2013_materials();
+  if (root.has("materials")) {
+    const auto n = root.child("materials");
+    n.allow_keys({"preset", "table"});
+    if (n.has("preset")) {
+      using Preset = std::vector<MaterialSpec> (*)();
+      spec.materials = n.child("preset").choose(
+          NameTable<Preset, 1>{{{"warburton2013", &warburton2013_materials}}}, "preset")();
     }
-    if (const auto t = n["table"]) {
-      if (!t.IsMap()) r.fail("materials.table", "expected a map of name: {...}");
-      for (const auto& kv : t) {
-        const std::string name = kv.first.as<std::string>();
-        const std::string f = "materials.table." + name;
-        r.check_keys(kv.second, f, {"youngs_modulus", "poisson_ratio", "density"});
-        for (const char* k : {"youngs_modulus", "poisson_ratio", "density"}) {
-          if (!kv.second[k]) r.fail(f, std::string("missing key '") + k + "'");
-        }
-        MaterialSpec m{name, r.positive(kv.second["youngs_modulus"], f + ".youngs_modulus"),
-                       r.number(kv.second["poisson_ratio"], f + ".poisson_ratio"),
-                       r.positive(kv.second["density"], f + ".density")};
+    if (n.has("table")) {
+      const auto t = n.child("table");
+      if (!t.is_map()) throw t.error("expected a map of name: {...}");
+      for (const auto& name : t.keys()) {
+        const auto e = t.child(name);
+        e.allow_keys({"youngs_modulus", "poisson_ratio", "density"});
+        MaterialSpec m{name, e.require("youngs_modulus").positive(),
+                       e.require("poisson_ratio").number(), e.require("density").positive()};
         if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) {
-          r.fail(f + ".poisson_ratio", "must be in (-1, 0.5)");
+          throw e.child("poisson_ratio").error("must be in (-1, 0.5)");
         }
         bool replaced = false;
         for (auto& old : spec.materials) {
@@ -389,118 +306,102 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
       }
     }
   }
-  auto need_material = [&](const std::string& name, const std::string& field) {
-    if (spec.find_material(name)) return;
-    std::string list;
-    for (const auto& m : spec.materials) list += (list.empty() ? "" : ", ") + m.name;
-    r.fail(field,
-           "unknown material '" + name + "' (known: " + (list.empty() ? "none" : list) + ")");
+  // The name of a material of the spec.
+  auto material = [&](const YamlNode& n) {
+    const std::string name = SpecReader::name(n);
+    if (spec.find_material(name)) return name;
+    std::set<std::string> known;
+    for (const auto& m : spec.materials) known.insert(m.name);
+    throw n.error("unknown material '" + name +
+                  "' (known: " + (known.empty() ? "none" : list_of(known)) + ")");
   };
 
   // Layers.
-  if (!root["layers"]) r.fail("layers", "missing: at least one layer with a material");
   {
-    const auto n = r.sequence(root["layers"], "layers");
-    if (n.size() == 0) r.fail("layers", "at least one layer is needed");
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      const std::string f = Reader::at("layers", i);
-      r.check_keys(n[i], f, {"material", "thickness"});
-      LayerSpec l;
-      if (!n[i]["material"]) r.fail(f, "missing key 'material'");
-      l.material = r.text(n[i]["material"], f + ".material");
-      need_material(l.material, f + ".material");
-      if (n[i]["thickness"]) {
-        l.thickness = r.length(n[i]["thickness"], f + ".thickness");
-      } else if (i + 1 != n.size()) {
-        r.fail(f + ".thickness", "missing: only the last layer may omit it (the rest)");
+    const auto n = root.child("layers");
+    if (!n.defined()) throw n.error("missing: at least one layer with a material");
+    const auto items = n.items();
+    if (items.empty()) throw n.error("at least one layer is needed");
+    for (const auto& l : items) {
+      l.allow_keys({"material", "thickness"});
+      LayerSpec layer;
+      layer.material = material(l.require("material"));
+      if (l.has("thickness")) {
+        layer.thickness = r.length(l.child("thickness"));
+      } else if (&l != &items.back()) {
+        throw l.child("thickness").error("missing: only the last layer may omit it (the rest)");
       }
-      spec.layers.push_back(l);
+      spec.layers.push_back(layer);
     }
   }
 
   // Muscles.
-  if (const auto n = root["muscles"]) {
-    r.sequence(n, "muscles");
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      const std::string f = Reader::at("muscles", i);
-      const auto m = n[i];
-      r.check_keys(
-          m, f,
-          {"name", "mesh", "material", "reference_stress", "optimal_stretch", "passive", "fibres"});
-      for (const char* k : {"name", "mesh", "material", "fibres"}) {
-        if (!m[k]) r.fail(f, std::string("missing key '") + k + "'");
+  for (const auto& m : root.child("muscles").items()) {
+    m.allow_keys(
+        {"name", "mesh", "material", "reference_stress", "optimal_stretch", "passive", "fibres"});
+    MuscleSpec s;
+    s.name = SpecReader::name(m.require("name"));
+    s.mesh = r.mesh(m.require("mesh"));
+    s.material = material(m.require("material"));
+    if (m.has("reference_stress")) s.reference_stress = m.child("reference_stress").positive();
+    if (m.has("optimal_stretch")) s.optimal_stretch = m.child("optimal_stretch").positive();
+    if (m.has("passive")) {
+      const auto p = m.child("passive");
+      p.allow_keys({"p1", "p2", "linear_stretch"});
+      if (p.has("p1")) s.passive_p1 = p.child("p1").number();
+      if (p.has("p2")) s.passive_p2 = p.child("p2").number();
+      if (p.has("linear_stretch")) {
+        s.passive_linear_stretch = p.child("linear_stretch").positive();
+        if (s.passive_linear_stretch <= 1) throw p.child("linear_stretch").error("must be > 1");
       }
-      MuscleSpec s;
-      s.name = r.text(m["name"], f + ".name");
-      s.mesh = r.mesh(m["mesh"], f + ".mesh");
-      s.material = r.text(m["material"], f + ".material");
-      need_material(s.material, f + ".material");
-      if (m["reference_stress"]) {
-        s.reference_stress = r.positive(m["reference_stress"], f + ".reference_stress");
-      }
-      if (m["optimal_stretch"]) {
-        s.optimal_stretch = r.positive(m["optimal_stretch"], f + ".optimal_stretch");
-      }
-      if (const auto p = m["passive"]) {
-        r.check_keys(p, f + ".passive", {"p1", "p2", "linear_stretch"});
-        if (p["p1"]) s.passive_p1 = r.number(p["p1"], f + ".passive.p1");
-        if (p["p2"]) s.passive_p2 = r.number(p["p2"], f + ".passive.p2");
-        if (p["linear_stretch"]) {
-          s.passive_linear_stretch = r.positive(p["linear_stretch"], f + ".passive.linear_stretch");
-          if (s.passive_linear_stretch <= 1) r.fail(f + ".passive.linear_stretch", "must be > 1");
-        }
-      }
-      const auto fb = m["fibres"];
-      const std::string ff = f + ".fibres";
-      r.check_keys(fb, ff, {"type", "direction", "origin", "insertion"});
-      if (!fb["type"]) r.fail(ff, "missing key 'type' (constant or harmonic)");
-      const std::string type = r.text(fb["type"], ff + ".type");
-      if (type == "constant") {
-        s.fibres.kind = FibreSpec::Kind::constant;
-        if (!fb["direction"]) r.fail(ff, "a constant fibre field needs a direction");
-        if (fb["origin"] || fb["insertion"]) r.fail(ff, "origin/insertion are for harmonic fibres");
-        const Vec3d d = r.vec3(fb["direction"], ff + ".direction");
-        const double len = norm(d);
-        if (!(len > 0)) r.fail(ff + ".direction", "must not be zero");
-        s.fibres.direction = (1.0 / len) * d;
-      } else if (type == "harmonic") {
-        s.fibres.kind = FibreSpec::Kind::harmonic;
-        if (fb["direction"]) r.fail(ff + ".direction", "a harmonic fibre field has no direction");
-        if (!fb["origin"] || !fb["insertion"]) {
-          r.fail(ff, "a harmonic fibre field needs origin and insertion");
-        }
-        s.fibres.origin = r.selector(fb["origin"], ff + ".origin");
-        s.fibres.insertion = r.selector(fb["insertion"], ff + ".insertion");
-      } else {
-        r.fail(ff + ".type", "unknown fibre type '" + type + "' (known: constant, harmonic)");
-      }
-      for (const auto& other : spec.muscles) {
-        if (other.name == s.name) r.fail(f + ".name", "duplicate muscle name '" + s.name + "'");
-      }
-      spec.muscles.push_back(std::move(s));
     }
+    const auto fb = m.require("fibres");
+    fb.allow_keys({"type", "direction", "origin", "insertion"});
+    if (!fb.has("type")) throw fb.error("missing key 'type' (constant or harmonic)");
+    s.fibres.kind = fb.child("type").choose(
+        NameTable<FibreSpec::Kind, 2>{
+            {{"constant", FibreSpec::Kind::constant}, {"harmonic", FibreSpec::Kind::harmonic}}},
+        "fibre type");
+    if (s.fibres.kind == FibreSpec::Kind::constant) {
+      if (!fb.has("direction")) throw fb.error("a constant fibre field needs a direction");
+      if (fb.has("origin") || fb.has("insertion")) {
+        throw fb.error("origin/insertion are for harmonic fibres");
+      }
+      const Vec3d d = SpecReader::vec3(fb.child("direction"));
+      const double len = norm(d);
+      if (!(len > 0)) throw fb.child("direction").error("must not be zero");
+      s.fibres.direction = (1.0 / len) * d;
+    } else {
+      if (fb.has("direction")) {
+        throw fb.child("direction").error("a harmonic fibre field has no direction");
+      }
+      if (!fb.has("origin") || !fb.has("insertion")) {
+        throw fb.error("a harmonic fibre field needs origin and insertion");
+      }
+      s.fibres.origin = r.selector(fb.child("origin"));
+      s.fibres.insertion = r.selector(fb.child("insertion"));
+    }
+    for (const auto& other : spec.muscles) {
+      if (other.name == s.name) {
+        throw m.child("name").error("duplicate muscle name '" + s.name + "'");
+      }
+    }
+    spec.muscles.push_back(std::move(s));
   }
 
   auto read_regions = [&](const char* key, bool allow_box, std::vector<RegionSpec>& out) {
-    const auto n = root[key];
-    if (!n) return;
-    r.sequence(n, key);
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      const std::string f = Reader::at(key, i);
-      if (allow_box) {
-        r.check_keys(n[i], f, {"name", "mesh", "box", "material"});
-      } else {
-        r.check_keys(n[i], f, {"name", "mesh", "material"});
-      }
+    for (const auto& e : root.child(key).items()) {
+      std::vector<std::string_view> keys{"name", "mesh", "material"};
+      if (allow_box) keys.push_back("box");
+      e.allow_keys(keys);
       RegionSpec g;
-      if (!n[i]["name"] || !n[i]["material"]) r.fail(f, "needs a name and a material");
-      g.name = r.text(n[i]["name"], f + ".name");
-      g.material = r.text(n[i]["material"], f + ".material");
-      need_material(g.material, f + ".material");
-      if (n[i]["mesh"]) g.mesh = r.mesh(n[i]["mesh"], f + ".mesh");
-      if (allow_box && n[i]["box"]) g.box = r.box(n[i]["box"], f + ".box");
+      if (!e.has("name") || !e.has("material")) throw e.error("needs a name and a material");
+      g.name = SpecReader::name(e.child("name"));
+      g.material = material(e.child("material"));
+      if (e.has("mesh")) g.mesh = r.mesh(e.child("mesh"));
+      if (allow_box && e.has("box")) g.box = r.box(e.child("box"));
       if (g.mesh.has_value() == g.box.has_value()) {
-        r.fail(f, allow_box ? "give exactly one of mesh and box" : "missing key 'mesh'");
+        throw e.error(allow_box ? "give exactly one of mesh and box" : "missing key 'mesh'");
       }
       out.push_back(std::move(g));
     }
@@ -508,92 +409,71 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   read_regions("tendons", false, spec.tendons);
   read_regions("regions", true, spec.regions);
   {
+    // Muscles, tendons and regions name surfaces: one name each, and not a reserved one.
     std::set<std::string> names{"outer", "inner"};
-    auto unique = [&](const std::string& name, const std::string& field) {
-      if (!names.insert(name).second) {
-        r.fail(field, "name '" + name + "' is used twice (or is reserved: outer, inner)");
+    auto unique = [&](const char* key, const auto& list) {
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        if (!names.insert(list[i].name).second) {
+          throw root.child(key).item(i).child("name").error(
+              "name '" + list[i].name + "' is used twice (or is reserved: outer, inner)");
+        }
       }
     };
-    for (std::size_t i = 0; i < spec.muscles.size(); ++i)
-      unique(spec.muscles[i].name, Reader::at("muscles", i) + ".name");
-    for (std::size_t i = 0; i < spec.tendons.size(); ++i)
-      unique(spec.tendons[i].name, Reader::at("tendons", i) + ".name");
-    for (std::size_t i = 0; i < spec.regions.size(); ++i)
-      unique(spec.regions[i].name, Reader::at("regions", i) + ".name");
+    unique("muscles", spec.muscles);
+    unique("tendons", spec.tendons);
+    unique("regions", spec.regions);
   }
 
   // Boundary conditions.
-  if (const auto n = root["boundary"]) {
-    r.sequence(n, "boundary");
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      const std::string f = Reader::at("boundary", i);
-      r.check_keys(n[i], f, {"type", "surface", "inside", "within", "box"});
-      BoundarySpec b;
-      b.field = f;
-      if (!n[i]["type"]) r.fail(f, "missing key 'type' (rigid or sliding)");
-      const std::string type = r.text(n[i]["type"], f + ".type");
-      if (type == "rigid") {
-        b.kind = BoundarySpec::Kind::rigid;
-      } else if (type == "sliding") {
-        b.kind = BoundarySpec::Kind::sliding;
-      } else {
-        r.fail(f + ".type", "unknown type '" + type + "' (known: rigid, sliding)");
-      }
-      if (n[i]["inside"]) b.inside = r.boolean(n[i]["inside"], f + ".inside");
-      if (n[i]["within"]) b.within = r.length(n[i]["within"], f + ".within");
-      if (n[i]["box"]) b.box = r.box(n[i]["box"], f + ".box");
-      if (n[i]["surface"]) {
-        b.surface = r.surface(n[i]["surface"], f + ".surface");
-      } else {
-        b.surface.name = "inner";
-        b.surface.field = f + ".surface";
-      }
-      b.has_surface = b.inside || b.within.has_value();
-      if (!b.has_surface && !b.box) {
-        r.fail(f, "select nodes with inside, within and/or box");
-      }
-      if (b.kind == BoundarySpec::Kind::sliding && !b.has_surface) {
-        r.fail(f, "a sliding condition needs a surface: give inside or within");
-      }
-      if (!b.has_surface && n[i]["surface"]) {
-        r.fail(f + ".surface", "a surface needs inside or within");
-      }
-      spec.boundary.push_back(std::move(b));
+  for (const auto& e : root.child("boundary").items()) {
+    e.allow_keys({"type", "surface", "inside", "within", "box"});
+    BoundarySpec b;
+    b.field = e.path();
+    if (!e.has("type")) throw e.error("missing key 'type' (rigid or sliding)");
+    b.kind = e.child("type").choose(
+        NameTable<BoundarySpec::Kind, 2>{
+            {{"rigid", BoundarySpec::Kind::rigid}, {"sliding", BoundarySpec::Kind::sliding}}},
+        "type");
+    if (e.has("inside")) b.inside = e.child("inside").boolean();
+    if (e.has("within")) b.within = r.length(e.child("within"));
+    if (e.has("box")) b.box = r.box(e.child("box"));
+    if (e.has("surface")) {
+      b.surface = r.surface(e.child("surface"));
+    } else {
+      b.surface.name = "inner";
+      b.surface.field = e.child("surface").path();
     }
+    b.has_surface = b.inside || b.within.has_value();
+    if (!b.has_surface && !b.box) throw e.error("select nodes with inside, within and/or box");
+    if (b.kind == BoundarySpec::Kind::sliding && !b.has_surface) {
+      throw e.error("a sliding condition needs a surface: give inside or within");
+    }
+    if (!b.has_surface && e.has("surface")) {
+      throw e.child("surface").error("a surface needs inside or within");
+    }
+    spec.boundary.push_back(std::move(b));
   }
 
-  if (const auto n = root["node_sets"]) {
-    r.sequence(n, "node_sets");
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      const std::string f = Reader::at("node_sets", i);
-      r.check_keys(n[i], f, {"name", "box", "surface", "distance"});
-      if (!n[i]["name"]) r.fail(f, "missing key 'name'");
-      NodeSetSpec s;
-      s.name = r.text(n[i]["name"], f + ".name");
-      YAML::Node sel = YAML::Clone(n[i]);
-      sel.remove("name");
-      s.select = r.selector(sel, f);
-      for (const auto& o : spec.node_sets) {
-        if (o.name == s.name) r.fail(f + ".name", "duplicate node set '" + s.name + "'");
-      }
-      spec.node_sets.push_back(std::move(s));
+  for (const auto& e : root.child("node_sets").items()) {
+    NodeSetSpec s;
+    s.select = r.selector(e, true);
+    s.name = SpecReader::name(e.require("name"));
+    for (const auto& o : spec.node_sets) {
+      if (o.name == s.name) throw e.child("name").error("duplicate node set '" + s.name + "'");
     }
+    spec.node_sets.push_back(std::move(s));
   }
 
-  if (const auto n = root["visual"]) {
-    r.sequence(n, "visual");
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      const std::string f = Reader::at("visual", i);
-      r.check_keys(n[i], f, {"name", "surface"});
-      if (!n[i]["name"] || !n[i]["surface"]) r.fail(f, "needs a name and a surface");
-      VisualSpec v{r.text(n[i]["name"], f + ".name"), r.surface(n[i]["surface"], f + ".surface")};
-      spec.visual.push_back(std::move(v));
-    }
-  } else {
+  for (const auto& e : root.child("visual").items()) {
+    e.allow_keys({"name", "surface"});
+    if (!e.has("name") || !e.has("surface")) throw e.error("needs a name and a surface");
+    spec.visual.push_back({SpecReader::name(e.child("name")), r.surface(e.child("surface"))});
+  }
+  if (!root.has("visual")) {
     spec.visual.push_back({"skin", SurfaceRef{"outer", std::nullopt, "visual"}});
   }
 
-  check_surface_names(r, spec);
+  check_surface_names(spec);
   return spec;
 }
 

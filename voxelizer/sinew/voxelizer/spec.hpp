@@ -4,10 +4,11 @@
 //
 // Units: every length in this struct is in metres (the file's lengths are in its `units`, default
 // m, and are converted on reading). Elastic moduli and stresses in Pa, densities in kg/m³.
-// Unknown keys, wrong types and out-of-range values throw ConfigError naming the file and the key
-// path (e.g. "muscles[1].fibres.origin.box.min").
+// Unknown keys, wrong types and out-of-range values throw ConfigError naming the file, the key
+// path (e.g. "muscles[1].fibres.origin.box.min") and the line (common's yaml_reader.hpp).
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -155,6 +156,10 @@ struct Spec {
 Spec read_spec(const std::filesystem::path& path);
 // The same from text; `file` is used for messages and to resolve relative mesh paths.
 Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file);
+
+// Calls `visit` for every surface reference of the spec that names or gives a surface: harmonic
+// fibres' origin and insertion, boundary conditions that use a surface, node sets, visual surfaces.
+void for_each_surface_ref(const Spec& spec, const std::function<void(const SurfaceRef&)>& visit);
 
 // The spec as one JSON document (every parameter, SI units), for the model's provenance.
 std::string spec_to_json(const Spec& spec);

@@ -1,0 +1,215 @@
+#include "sinew/common/yaml_reader.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <utility>
+
+#include <fmt/format.h>
+
+namespace sinew {
+
+struct YamlNode::State {
+  YAML::Node node;
+  std::string path;
+  std::shared_ptr<const std::string> file;  // shared by every node of one document
+};
+
+namespace {
+
+std::string join_key(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+// yaml-cpp answers a lookup that finds nothing with an invalid "zombie" node on which most calls
+// throw; an empty node answers the same questions (not defined, no line, size 0) without throwing.
+YAML::Node or_empty(const YAML::Node& node) {
+  return node.IsDefined() ? node : YAML::Node();
+}
+
+}  // namespace
+
+YamlNode::YamlNode(std::shared_ptr<const State> state) : state_(std::move(state)) {}
+
+YamlNode YamlNode::derived(const YAML::Node& node, std::string path) const {
+  return YamlNode(std::make_shared<const State>(State{node, std::move(path), state_->file}));
+}
+
+const std::string& YamlNode::file() const {
+  return *state_->file;
+}
+const std::string& YamlNode::path() const {
+  return state_->path;
+}
+
+std::optional<int> YamlNode::line() const {
+  const auto& n = state_->node;
+  if (!n.IsDefined() || n.Mark().line < 0) return std::nullopt;
+  return n.Mark().line + 1;
+}
+
+bool YamlNode::defined() const {
+  return state_->node.IsDefined() && !state_->node.IsNull();
+}
+bool YamlNode::is_map() const {
+  return state_->node.IsMap();
+}
+bool YamlNode::is_sequence() const {
+  return state_->node.IsSequence();
+}
+bool YamlNode::is_scalar() const {
+  return state_->node.IsScalar();
+}
+std::size_t YamlNode::size() const {
+  return is_map() || is_sequence() ? state_->node.size() : 0;
+}
+
+ConfigError YamlNode::error(const std::string& problem) const {
+  const auto l = line();
+  return ConfigError(file(), path(), l ? fmt::format("{} (line {})", problem, *l) : problem);
+}
+
+YamlNode YamlNode::child(const std::string& key) const {
+  const YAML::Node& n = state_->node;
+  return derived(is_map() ? or_empty(n[key]) : YAML::Node(), join_key(path(), key));
+}
+
+YamlNode YamlNode::item(std::size_t i) const {
+  const YAML::Node& n = state_->node;
+  return derived(is_sequence() ? or_empty(n[i]) : YAML::Node(), fmt::format("{}[{}]", path(), i));
+}
+
+bool YamlNode::has(const std::string& key) const {
+  return child(key).defined();
+}
+
+std::vector<YamlNode> YamlNode::items() const {
+  std::vector<YamlNode> out;
+  if (!defined()) return out;
+  expect_sequence();
+  for (std::size_t i = 0; i < size(); ++i) out.push_back(item(i));
+  return out;
+}
+
+YamlNode YamlNode::require(const std::string& key) const {
+  auto c = child(key);
+  if (!c.defined()) throw error(fmt::format("missing key '{}'", key));
+  return c;
+}
+
+void YamlNode::expect_map() const {
+  if (!is_map()) throw error("expected a mapping of keys");
+}
+
+void YamlNode::expect_sequence() const {
+  if (!is_sequence()) throw error("expected a list");
+}
+
+void YamlNode::allow_keys(const std::vector<std::string_view>& allowed) const {
+  for (const auto& key : keys()) {
+    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+      std::string list;
+      for (const auto& a : allowed) list.append(list.empty() ? "" : ", ").append(a);
+      throw child(key).error(fmt::format("unknown key '{}' (allowed here: {})", key, list));
+    }
+  }
+}
+
+std::vector<std::string> YamlNode::keys() const {
+  expect_map();
+  std::vector<std::string> out;
+  for (const auto& kv : state_->node) {
+    if (!kv.first.IsScalar()) throw error("keys must be plain names");
+    auto key = kv.first.Scalar();
+    if (std::find(out.begin(), out.end(), key) != out.end()) {
+      throw derived(kv.first, join_key(path(), key))
+          .error(fmt::format("key '{}' given twice", key));
+    }
+    out.push_back(std::move(key));
+  }
+  return out;
+}
+
+std::string YamlNode::text() const {
+  if (!is_scalar()) throw error("expected a text value");
+  return state_->node.Scalar();
+}
+
+namespace {
+// n.as<T>(), or the ConfigError "expected <what>, got '<text>'" from `at`.
+template <typename T>
+T convert(const YAML::Node& n, const YamlNode& at, const char* what) {
+  if (!n.IsScalar()) throw at.error(fmt::format("expected {}", what));
+  try {
+    return n.as<T>();
+  } catch (const YAML::Exception&) {
+    throw at.error(fmt::format("expected {}, got '{}'", what, n.Scalar()));
+  }
+}
+}  // namespace
+
+double YamlNode::number() const {
+  const double v = convert<double>(state_->node, *this, "a number");
+  // yaml-cpp reads .nan and .inf as numbers; no quantity of a spec or scene may be one.
+  if (!std::isfinite(v)) {
+    throw error(fmt::format("expected a finite number, got '{}'", state_->node.Scalar()));
+  }
+  return v;
+}
+
+double YamlNode::positive() const {
+  const double v = number();
+  if (!(v > 0)) throw error(fmt::format("must be > 0, got {}", v));
+  return v;
+}
+
+double YamlNode::non_negative() const {
+  const double v = number();
+  if (!(v >= 0)) throw error(fmt::format("must be >= 0, got {}", v));
+  return v;
+}
+
+std::int64_t YamlNode::integer() const {
+  return convert<std::int64_t>(state_->node, *this, "an integer");
+}
+
+bool YamlNode::boolean() const {
+  return convert<bool>(state_->node, *this, "true or false");
+}
+
+std::array<double, 3> YamlNode::vec3() const {
+  if (!is_sequence() || size() != 3) throw error("expected a list of 3 numbers [x, y, z]");
+  return {item(0).number(), item(1).number(), item(2).number()};
+}
+
+ConfigError YamlNode::unknown_name(std::string_view what, const std::string& text,
+                                   const std::string& list) const {
+  return error(fmt::format("unknown {} '{}' (expected one of: {})", what, text, list));
+}
+
+YamlNode parse_yaml(const std::string& text, const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(file, "",
+                      fmt::format("YAML syntax error (not valid YAML): {} (line {}, column {})",
+                                  e.msg, e.mark.line + 1, e.mark.column + 1));
+  }
+  return YamlNode(std::make_shared<const YamlNode::State>(
+      YamlNode::State{root, "", std::make_shared<const std::string>(file)}));
+}
+
+std::string read_text_file(const std::filesystem::path& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path.string(), "", "cannot open the " + what);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw IoError(path.string(), "", "cannot read the " + what);
+  return ss.str();
+}
+
+}  // namespace sinew

@@ -1,0 +1,200 @@
+// The shared YAML reader (common/yaml_reader.hpp): key paths, lines, conversions and the errors
+// that name the file, the key and the line.
+#include "sinew/common/yaml_reader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sinew/common/error.hpp"
+#include "sinew/common/names.hpp"
+
+namespace sinew {
+namespace {
+
+// Runs `read` and returns the ConfigError it throws; fails the test when it throws none.
+ConfigError config_error(const std::function<void()>& read) {
+  try {
+    read();
+  } catch (const ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "expected a ConfigError";
+  return ConfigError("", "", "");
+}
+
+const char* kDoc =
+    "name: box\n"          // line 1
+    "size: 0.5\n"          // line 2
+    "count: 3\n"           // line 3
+    "flag: true\n"         // line 4
+    "origin: [1, 2, 3]\n"  // line 5
+    "empty:\n"             // line 6
+    "inner:\n"             // line 7
+    "  depth: -2\n"        // line 8
+    "  colour: red\n"      // line 9
+    "items:\n"             // line 10
+    "  - {a: 1}\n"         // line 11
+    "  - {a: x}\n";        // line 12
+
+TEST(YamlReader, ReadsScalarsListsAndMaps) {
+  const YamlNode root = parse_yaml(kDoc, "doc.yaml");
+  EXPECT_TRUE(root.is_map());
+  EXPECT_EQ(root.file(), "doc.yaml");
+  EXPECT_EQ(root.path(), "");
+  EXPECT_EQ(root.child("name").text(), "box");
+  EXPECT_DOUBLE_EQ(root.child("size").positive(), 0.5);
+  EXPECT_EQ(root.child("count").integer(), 3);
+  EXPECT_TRUE(root.child("flag").boolean());
+  EXPECT_EQ(root.child("origin").vec3(), (std::array<double, 3>{1, 2, 3}));
+  EXPECT_EQ(root.child("items").size(), 2u);
+  EXPECT_EQ(root.child("items").item(1).child("a").path(), "items[1].a");
+  EXPECT_EQ(root.child("inner").child("depth").path(), "inner.depth");
+  EXPECT_EQ(root.child("inner").child("depth").line(), 8);
+  EXPECT_EQ(root.keys(), (std::vector<std::string>{"name", "size", "count", "flag", "origin",
+                                                   "empty", "inner", "items"}));
+}
+
+TEST(YamlReader, AbsentAndEmptyKeys) {
+  const YamlNode root = parse_yaml(kDoc, "doc.yaml");
+  EXPECT_FALSE(root.has("missing"));
+  EXPECT_FALSE(root.has("empty"));  // `empty:` has no value: the same as leaving it out
+  EXPECT_TRUE(root.has("inner"));
+  const YamlNode missing = root.child("missing");
+  EXPECT_FALSE(missing.defined());
+  EXPECT_FALSE(missing.line().has_value());
+  EXPECT_EQ(missing.path(), "missing");
+  // Lookups below an absent key or in a scalar stay absent rather than failing.
+  EXPECT_FALSE(missing.child("deeper").item(2).defined());
+  EXPECT_FALSE(root.child("name").child("x").defined());
+  EXPECT_FALSE(root.child("items").item(7).defined());
+}
+
+TEST(YamlReader, ItemsOfAList) {
+  const YamlNode root = parse_yaml(kDoc, "doc.yaml");
+  const auto items = root.child("items").items();
+  ASSERT_EQ(items.size(), 2u);
+  EXPECT_EQ(items[1].path(), "items[1]");
+  EXPECT_EQ(items[1].line(), 12);
+  EXPECT_TRUE(root.child("missing").items().empty());  // an absent list has no items
+  const auto e = config_error([&] { root.child("inner").items(); });
+  EXPECT_STREQ(e.what(), "doc.yaml: inner: expected a list (line 8)");
+}
+
+TEST(YamlReader, ErrorsNameFileKeyAndLine) {
+  const YamlNode root = parse_yaml(kDoc, "doc.yaml");
+  const auto e = config_error([&] { root.child("inner").child("depth").positive(); });
+  EXPECT_EQ(e.file(), "doc.yaml");
+  EXPECT_EQ(e.field(), "inner.depth");
+  EXPECT_STREQ(e.what(), "doc.yaml: inner.depth: must be > 0, got -2 (line 8)");
+
+  const auto item = config_error([&] { root.child("items").item(1).child("a").number(); });
+  EXPECT_STREQ(item.what(), "doc.yaml: items[1].a: expected a number, got 'x' (line 12)");
+
+  // An absent key has no line.
+  const auto absent = config_error([&] { root.child("missing").number(); });
+  EXPECT_STREQ(absent.what(), "doc.yaml: missing: expected a number");
+}
+
+TEST(YamlReader, UnknownKeysAreRejectedAtTheKey) {
+  const YamlNode root = parse_yaml(kDoc, "doc.yaml");
+  const auto e = config_error([&] { root.child("inner").allow_keys({"depth", "width"}); });
+  EXPECT_EQ(e.field(), "inner.colour");
+  EXPECT_STREQ(
+      e.what(),
+      "doc.yaml: inner.colour: unknown key 'colour' (allowed here: depth, width) (line 9)");
+  EXPECT_NO_THROW(root.child("inner").allow_keys({"colour", "depth"}));
+  // Only maps have keys.
+  EXPECT_NE(std::string(config_error([&] { root.child("origin").allow_keys({"x"}); }).what())
+                .find("origin: expected a mapping of keys"),
+            std::string::npos);
+}
+
+TEST(YamlReader, KeyGivenTwiceIsAnError) {
+  const YamlNode root = parse_yaml("a: 1\nb:\n  c: 1\n  c: 2\n", "twice.yaml");
+  const auto e = config_error([&] { root.child("b").keys(); });
+  EXPECT_EQ(e.field(), "b.c");
+  EXPECT_NE(std::string(e.what()).find("key 'c' given twice (line 4)"), std::string::npos)
+      << e.what();
+}
+
+TEST(YamlReader, RequiredKeys) {
+  const YamlNode root = parse_yaml(kDoc, "doc.yaml");
+  EXPECT_EQ(root.require("inner").child("depth").integer(), -2);
+  const auto e = config_error([&] { root.child("inner").require("width"); });
+  EXPECT_EQ(e.field(), "inner");  // the map that lacks the key
+  EXPECT_STREQ(e.what(), "doc.yaml: inner: missing key 'width' (line 8)");
+  // An empty value is missing too.
+  EXPECT_NE(
+      std::string(config_error([&] { root.require("empty"); }).what()).find("missing key 'empty'"),
+      std::string::npos);
+}
+
+TEST(YamlReader, TypeConversionFailures) {
+  const YamlNode root = parse_yaml(
+      "n: ten\nf: .nan\ni: 1.5\nb: maybe\nv: [1, 2]\nw: [1, a, 3]\nl: {x: 1}\nz: 0\ns: [a]\n",
+      "types.yaml");
+  // Each read and the message it must give.
+  const std::vector<std::pair<std::function<void()>, std::string>> cases{
+      {[&] { root.child("n").number(); }, "n: expected a number, got 'ten' (line 1)"},
+      {[&] { root.child("f").number(); }, "f: expected a finite number, got '.nan' (line 2)"},
+      {[&] { root.child("i").integer(); }, "i: expected an integer, got '1.5' (line 3)"},
+      {[&] { root.child("b").boolean(); }, "b: expected true or false, got 'maybe' (line 4)"},
+      {[&] { root.child("v").vec3(); }, "v: expected a list of 3 numbers [x, y, z] (line 5)"},
+      {[&] { root.child("w").vec3(); }, "w[1]: expected a number, got 'a' (line 6)"},
+      {[&] { root.child("l").number(); }, "l: expected a number (line 7)"},
+      {[&] { root.child("l").text(); }, "l: expected a text value (line 7)"},
+      {[&] { root.child("z").positive(); }, "z: must be > 0, got 0 (line 8)"},
+      {[&] { root.child("s").expect_map(); }, "s: expected a mapping of keys (line 9)"},
+      {[&] { root.child("l").expect_sequence(); }, "l: expected a list (line 7)"}};
+  for (const auto& [read, message] : cases) {
+    EXPECT_EQ(std::string(config_error(read).what()), "types.yaml: " + message);
+  }
+  EXPECT_DOUBLE_EQ(root.child("z").non_negative(), 0.0);
+}
+
+TEST(YamlReader, ChoosesFromANameTable) {
+  enum class Shape { cube, ball };
+  constexpr NameTable<Shape, 2> kShapes{{{"cube", Shape::cube}, {"ball", Shape::ball}}};
+  EXPECT_STREQ(name_of(kShapes, Shape::ball), "ball");
+  EXPECT_EQ(names_list(kShapes), "cube, ball");
+  const YamlNode root = parse_yaml("a: ball\nb: cone\n", "shapes.yaml");
+  EXPECT_EQ(root.child("a").choose(kShapes), Shape::ball);
+  EXPECT_STREQ(config_error([&] { root.child("b").choose(kShapes); }).what(),
+               "shapes.yaml: b: unknown value 'cone' (expected one of: cube, ball) (line 2)");
+  EXPECT_STREQ(config_error([&] { root.child("b").choose(kShapes, "shape"); }).what(),
+               "shapes.yaml: b: unknown shape 'cone' (expected one of: cube, ball) (line 2)");
+}
+
+TEST(YamlReader, SyntaxErrorNamesFileAndLine) {
+  const auto e = config_error([] { parse_yaml("a: 1\nb: [unclosed\n", "bad.yaml"); });
+  EXPECT_EQ(e.file(), "bad.yaml");
+  EXPECT_EQ(e.field(), "");
+  const std::string what = e.what();
+  EXPECT_EQ(what.rfind("bad.yaml: YAML syntax error (not valid YAML): ", 0), 0u) << what;
+  EXPECT_NE(what.find("(line "), std::string::npos) << what;
+}
+
+TEST(YamlReader, ReadsTextFiles) {
+  const auto path = std::filesystem::temp_directory_path() / "sinew_yaml_reader_test.yaml";
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << "a: 1\n";
+  }
+  EXPECT_EQ(read_text_file(path, "test file"), "a: 1\n");
+  std::filesystem::remove(path);
+  try {
+    read_text_file("/nonexistent/x.yaml", "test file");
+    FAIL() << "expected an IoError";
+  } catch (const IoError& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/x.yaml: cannot open the test file");
+  }
+}
+
+}  // namespace
+}  // namespace sinew
