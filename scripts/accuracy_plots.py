@@ -91,6 +91,22 @@ def table(head, body):
 
 
 # ---- plots -------------------------------------------------------------------------------------
+def decorate(ax, xlabel, ylabel, title, **legend):
+    """Labels, title, legend (keyword arguments go to ax.legend) and a grid on both tick levels."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(**legend)
+    ax.grid(True, which="both", alpha=0.3)
+
+
+def save(fig, path):
+    """Writes the figure to path (PNG, 110 dpi) and closes it."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def plot_convergence(rows, path):
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
     for nu, mark, color in (("0.3", "o", "C0"), ("0.49", "s", "C1")):
@@ -114,19 +130,11 @@ def plot_convergence(rows, path):
         h0, h1 = min(hs), max(hs)
         e1 = max(es)
         a.loglog([h0, h1], [e1 * (h0 / h1) ** 2, e1], "k--", lw=1, label="slope h²")
-    a.set_xlabel("voxel side h (mm)")
-    a.set_ylabel("tip deflection error (vs Richardson)")
-    a.set_title("cantilever under its own weight: error vs h")
-    a.legend()
-    a.grid(True, which="both", alpha=0.3)
-    b.set_xlabel("wall time to static answer (s)")
-    b.set_ylabel("tip deflection error")
-    b.set_title("error vs wall time (lines: Pareto front per ν)")
-    b.legend()
-    b.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    decorate(a, "voxel side h (mm)", "tip deflection error (vs Richardson)",
+             "cantilever under its own weight: error vs h")
+    decorate(b, "wall time to static answer (s)", "tip deflection error",
+             "error vs wall time (lines: Pareto front per ν)")
+    save(fig, path)
 
 
 def plot_nu(rows, path):
@@ -146,14 +154,10 @@ def plot_nu(rows, path):
         ax.semilogx(x, y, style + "o", ms=4, label=f"{mod}, κ={g(kappa)}, n={n}")
     ax.axhline(1, color="k", lw=0.8)
     ax.invert_xaxis()
-    ax.set_xlabel("0.5 − ν (log; right = nearly incompressible)")
-    ax.set_ylabel("tip deflection / beam theory")
-    ax.set_title("near-incompressible bending: hourglass modulus M* = 2μ (shear) vs λ+2μ (p_wave)")
-    ax.legend(fontsize=7, ncol=2)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    decorate(ax, "0.5 − ν (log; right = nearly incompressible)", "tip deflection / beam theory",
+             "near-incompressible bending: hourglass modulus M* = 2μ (shear) vs λ+2μ (p_wave)",
+             fontsize=7, ncol=2)
+    save(fig, path)
     return True
 
 
@@ -172,11 +176,8 @@ def plot_forehead(rows, path):
     hs = [r["h_mm"] for r in rs]
     e1 = max(r["error"] for r in rs)
     a.loglog([min(hs), max(hs)], [e1 * (min(hs) / max(hs)) ** 2, e1], "k--", lw=1, label="slope h²")
-    a.set_xlabel("voxel side h (mm)")
-    a.set_ylabel("skin displacement error (relative)")
-    a.set_title("forehead patch, brow raise: error vs h")
-    a.legend(fontsize=8)
-    a.grid(True, which="both", alpha=0.3)
+    decorate(a, "voxel side h (mm)", "skin displacement error (relative)",
+             "forehead patch, brow raise: error vs h", fontsize=8)
     # Error vs cost, with every forehead and knob point at default time scaling.
     pts, labels = [], []
     for r in rs + [r for r in sel(rows, "knobs") if r["error_measure"].startswith("skin_max_vs_ref")
@@ -188,14 +189,9 @@ def plot_forehead(rows, path):
     b.plot([pts[i][0] for i in front], [pts[i][1] for i in front], "k-", lw=1.2, label="Pareto front")
     for i in front:
         b.annotate(labels[i], pts[i], textcoords="offset points", xytext=(4, 3), fontsize=7)
-    b.set_xlabel("wall time per simulated second (s)")
-    b.set_ylabel("skin displacement error (max, relative)")
-    b.set_title("error vs cost (Pareto front)")
-    b.legend(fontsize=8)
-    b.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    decorate(b, "wall time per simulated second (s)", "skin displacement error (max, relative)",
+             "error vs cost (Pareto front)", fontsize=8)
+    save(fig, path)
     return True
 
 
@@ -306,9 +302,7 @@ def plot_knobs(rows, path):
         ax.set_title("switches (forehead)", fontsize=9)
     for ax in axes.flat:
         ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
     return any_
 
 
@@ -332,9 +326,7 @@ def plot_effects(rows, path):
                  f"{int(rs[0]['elements'])} elements)")
     ax.legend()
     ax.grid(True, axis="y", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
     return True
 
 
