@@ -331,23 +331,26 @@ def plot_effects(rows, path):
 
 
 # ---- tables ------------------------------------------------------------------------------------
+def para(out, text):
+    """Appends a Markdown paragraph (text, then a blank line) to the list of lines out."""
+    out += [text, ""]
+
+
 def tables(header, rows, label, images_rel):
     out = [f"Run `{label}`. Provenance (from the CSV header):", ""]
     out += [f"- {h}" for h in header]
     out.append("")
     conv = sel(rows, "convergence", "per_edge")
     if conv:
-        out.append("**Convergence (cantilever under its own weight)**: tip deflection error against the "
-                   "Richardson extrapolation of the three finest meshes; also against beam theory.")
-        out.append("")
+        para(out, "**Convergence (cantilever under its own weight)**: tip deflection error against the "
+                  "Richardson extrapolation of the three finest meshes; also against beam theory.")
         body = []
         for r in conv:
             body.append([g(r["nu"]), int(r["per_edge"]), g(r["h_mm"]), int(r["elements"]),
                          g(r["dt_s"]), int(r["steps"]), g(r["wall_s"]), g(r["wall_per_step_us"]),
                          pct(r["error"]), pct(r["error_rms"]), r["status"]])
-        out.append(table(["ν", "n", "h (mm)", "elements", "Δt (s)", "steps", "wall (s)",
-                          "µs/step", "error vs Richardson", "vs beam theory", "status"], body))
-        out.append("")
+        para(out, table(["ν", "n", "h (mm)", "elements", "Δt (s)", "steps", "wall (s)",
+                         "µs/step", "error vs Richardson", "vs beam theory", "status"], body))
         for r in sel(rows, "convergence", "reference"):
             out.append(f"- ν = {g(r['nu'])}: reference tip deflection {g(r['measured'], 6)} m "
                        f"({r['value']}, observed order {g(r['error'])}); reference / beam theory − 1 "
@@ -358,13 +361,11 @@ def tables(header, rows, label, images_rel):
                 p = slope([r["h_mm"] for r in rs], [r["error"] for r in rs])
                 out.append(f"- ν = {nu}: least-squares slope of log error vs log h over n ≥ 2: {g(p)}.")
         out.append("")
-        out.append(f"![convergence]({images_rel}/{label}_convergence.png)")
-        out.append("")
+        para(out, f"![convergence]({images_rel}/{label}_convergence.png)")
     nus = sel(rows, "nu_sweep", "nu")
     if nus:
-        out.append("**Near-incompressible bending**: tip deflection / beam theory (1 = beam theory; "
-                   "below 1 = too stiff, locking).")
-        out.append("")
+        para(out, "**Near-incompressible bending**: tip deflection / beam theory (1 = beam theory; "
+                  "below 1 = too stiff, locking).")
         cols = sorted({(r["hourglass_modulus"], r["kappa"], int(r["per_edge"])) for r in nus})
         nuv = sorted({r["nu"] for r in nus})
         body = []
@@ -376,40 +377,33 @@ def tables(header, rows, label, images_rel):
                 row.append(g(1 + m[0]["error"], 4) if m and m[0]["status"] == "ok"
                            else (m[0]["status"] if m else "–"))
             body.append(row)
-        out.append(table(["ν"] + [f"{m}, κ {g(k)}, n {n}" for m, k, n in cols], body))
-        out.append("")
+        para(out, table(["ν"] + [f"{m}, κ {g(k)}, n {n}" for m, k, n in cols], body))
         w = [r for r in nus if r["status"] == "ok"]
         if w:
             slow = max(w, key=lambda r: r["wall_s"])
-            out.append(f"Slowest point: ν = {g(slow['nu'], 5)} ({slow['hourglass_modulus']}, n = "
-                       f"{int(slow['per_edge'])}): {int(slow['steps'])} steps, Δt = {g(slow['dt_s'])} s, "
-                       f"{g(slow['wall_s'])} s wall.")
-            out.append("")
-        out.append(f"![nu sweep]({images_rel}/{label}_nu_sweep.png)")
-        out.append("")
+            para(out, f"Slowest point: ν = {g(slow['nu'], 5)} ({slow['hourglass_modulus']}, n = "
+                      f"{int(slow['per_edge'])}): {int(slow['steps'])} steps, Δt = {g(slow['dt_s'])} s, "
+                      f"{g(slow['wall_s'])} s wall.")
+        para(out, f"![nu sweep]({images_rel}/{label}_nu_sweep.png)")
     fh = sel(rows, "forehead")
     if fh:
-        out.append("**Forehead patch, brow raise**: skin (top surface) displacement at 40 ms against "
-                   "the reference, max and rms over 153 points, relative to the reference's largest "
-                   "skin displacement.")
-        out.append("")
+        para(out, "**Forehead patch, brow raise**: skin (top surface) displacement at 40 ms against "
+                  "the reference, max and rms over 153 points, relative to the reference's largest "
+                  "skin displacement.")
         body = []
         for r in fh:
             body.append([r["knob"], r["precision"], g(r["h_mm"]), int(r["elements"]), g(r["dt_s"]),
                          int(r["steps"]), g(r["wall_s"]), g(r["wall_per_step_us"]),
                          g(r["wall_per_sim_s"]), pct(r["error"]), pct(r["error_rms"]),
                          g(r["measured"]), r["status"]])
-        out.append(table(["run", "precision", "h (mm)", "elements", "Δt (s)", "steps", "wall (s)",
-                          "µs/step", "wall s per simulated s", "skin error max", "rms",
-                          "largest skin displacement (m)", "status"], body))
-        out.append("")
-        out.append(f"![forehead]({images_rel}/{label}_forehead.png)")
-        out.append("")
+        para(out, table(["run", "precision", "h (mm)", "elements", "Δt (s)", "steps", "wall (s)",
+                         "µs/step", "wall s per simulated s", "skin error max", "rms",
+                         "largest skin displacement (m)", "status"], body))
+        para(out, f"![forehead]({images_rel}/{label}_forehead.png)")
     kn = sel(rows, "knobs")
     if kn:
-        out.append("**Knobs one at a time** (forehead patch at the h of the `baseline` row unless "
-                   "the knob says beam; error measure per row):")
-        out.append("")
+        para(out, "**Knobs one at a time** (forehead patch at the h of the `baseline` row unless "
+                  "the knob says beam; error measure per row):")
         body = []
         for r in kn:
             body.append([r["knob"], r["value"], r["precision"], g(r["h_mm"]), g(r["dt_s"]),
@@ -417,22 +411,17 @@ def tables(header, rows, label, images_rel):
                          pct(r["error"]) if r["knob"] != "kappa_beam" else g(r["error"]),
                          pct(r["error_rms"]), g(r["hourglass_ratio"]), r["error_measure"],
                          r["status"]])
-        out.append(table(["knob", "value", "precision", "h (mm)", "Δt (s)", "steps", "wall (s)",
-                          "µs/step", "error (max)", "rms", "hourglass/strain", "against", "status"],
-                         body))
-        out.append("")
-        out.append(f"![knobs]({images_rel}/{label}_knobs.png)")
-        out.append("")
+        para(out, table(["knob", "value", "precision", "h (mm)", "Δt (s)", "steps", "wall (s)",
+                         "µs/step", "error (max)", "rms", "hourglass/strain", "against", "status"],
+                        body))
+        para(out, f"![knobs]({images_rel}/{label}_knobs.png)")
     ef = sel(rows, "effects")
     if ef:
-        out.append("**Cost of each effect** (time per step, fixed number of steps):")
-        out.append("")
+        para(out, "**Cost of each effect** (time per step, fixed number of steps):")
         body = [[r["value"], r["precision"], int(r["elements"]), int(r["steps"]),
                  g(r["wall_per_step_us"])] for r in ef]
-        out.append(table(["effects", "precision", "elements", "steps", "µs/step"], body))
-        out.append("")
-        out.append(f"![effects]({images_rel}/{label}_effects.png)")
-        out.append("")
+        para(out, table(["effects", "precision", "elements", "steps", "µs/step"], body))
+        para(out, f"![effects]({images_rel}/{label}_effects.png)")
     return "\n".join(out)
 
 
