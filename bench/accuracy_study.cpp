@@ -41,7 +41,6 @@
 #include "sinew/formats/box_model.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/engine.hpp"
-#include "sinew/simulator/physics/sliding.hpp"
 #include "sliding_height_field.hpp"
 
 using namespace sinew;

@@ -14,7 +14,6 @@
 
 #include <omp.h>
 
-#include "sinew/common/math.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/simulator/engine.hpp"
 #include "sliding_height_field.hpp"
