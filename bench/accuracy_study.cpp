@@ -42,7 +42,7 @@
 #include "sinew/formats/box_model.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/engine.hpp"
-#include "sinew/simulator/physics/sliding.hpp"
+#include "sliding_height_field.hpp"
 
 using namespace sinew;
 using namespace sinew::simulator;
@@ -295,25 +295,13 @@ BeamResult run_beam(const Options& o, const BeamSpec& c) {
 constexpr double kPatchX = 16e-3, kPatchY = 8e-3, kPatchZ = 2e-3;
 constexpr double kRampTime = 0.02, kPatchDuration = 0.04, kPeakActivation = 0.1, kPatchAlpha = 150;
 
-formats::Surface skull_surface() {
-  const double s = 0.25e-3, x0 = -1e-3, y0 = -1e-3, xc = 0.5 * kPatchX, radius = 32e-3;
+bench::HeightField skull_surface() {
+  const double s = 0.25e-3, xc = 0.5 * kPatchX, radius = 32e-3;
   const int sx = int(std::lround((kPatchX + 2e-3) / s)),
             sy = int(std::lround((kPatchY + 2e-3) / s));
-  formats::Surface skull;
-  skull.name = "skull";
-  skull.role = formats::SurfaceRole::sliding;
-  for (int j = 0; j <= sy; ++j)
-    for (int i = 0; i <= sx; ++i) {
-      const double x = x0 + s * i, y = y0 + s * j;
-      skull.vertices.push_back({x, y, -0.125e-3 - (x - xc) * (x - xc) / (2 * radius)});
-    }
-  for (int j = 0; j < sy; ++j)
-    for (int i = 0; i < sx; ++i) {
-      const Index a = Index(j * (sx + 1) + i), b = a + 1, c = a + sx + 2, d = a + sx + 1;
-      skull.triangles.push_back({a, b, c});  // counter-clockwise seen from +z (the tissue side)
-      skull.triangles.push_back({a, c, d});
-    }
-  return skull;
+  return bench::make_height_field("skull", -1e-3, -1e-3, s, sx, sy, [&](double x, double) {
+    return -0.125e-3 - (x - xc) * (x - xc) / (2 * radius);
+  });
 }
 
 formats::Model forehead_patch(double h) {
@@ -342,39 +330,7 @@ formats::Model forehead_patch(double h) {
   }
   spec.created = "2026-01-01T00:00:00Z";
   formats::Model model = formats::make_box_model(spec);
-  model.surfaces.push_back(skull_surface());
-  const auto& s = model.surfaces[0];
-  using V = Vec3<double>;
-  const double step = 0.25e-3;
-  const int sx = int(std::lround((kPatchX + 2e-3) / step));
-  for (std::size_t n = 0; n < model.node_count(); ++n) {
-    if (model.node_lattice[n][2] != 0) continue;
-    const auto x = model.node_position(Index(n));
-    const V p{x[0], x[1], x[2]};
-    // A gentle height field: the closest triangle lies within a few cells of the node.
-    const int ci = int(std::floor((x[0] + 1e-3) / step)),
-              cj = int(std::floor((x[1] + 1e-3) / step));
-    double best = 1e300;
-    int bt = 0;
-    for (int j = std::max(0, cj - 8); j <= cj + 8; ++j)
-      for (int i = std::max(0, ci - 8); i <= std::min(sx - 1, ci + 8); ++i)
-        for (int t = 0; t < 2; ++t) {
-          const std::size_t id = std::size_t(2 * (j * sx + i) + t);
-          if (id >= s.triangles.size()) continue;
-          const auto& tri = s.triangles[id];
-          const auto& a = s.vertices[std::size_t(tri[0])];
-          const auto& b = s.vertices[std::size_t(tri[1])];
-          const auto& c = s.vertices[std::size_t(tri[2])];
-          const double d =
-              norm(p - physics::closest_point_on_triangle(
-                           p, V{a[0], a[1], a[2]}, V{b[0], b[1], b[2]}, V{c[0], c[1], c[2]}));
-          if (d < best) {
-            best = d;
-            bt = int(id);
-          }
-        }
-    model.sliding.push_back({Index(n), 0, best, Index(bt)});
-  }
+  bench::bind_bottom_to_height_field(model, skull_surface(), 8);
   return model;
 }
 

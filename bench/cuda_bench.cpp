@@ -15,6 +15,7 @@
 #include <exception>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sinew/simulator/benchmark_models.hpp"
@@ -39,14 +40,22 @@ const std::vector<Index>* node_set(const formats::Model& m, const std::string& n
   return nullptr;
 }
 
-Case skin_block() {
-  Case c{"skin block", 1.48, make_skin_block_model(), {}};
+// What every case shares: damping, a run length, and the node set held rigid.
+Case damped_case(std::string name, double paper_ms, formats::Model model, double damping_alpha,
+                 double duration, const std::string& rigid_set) {
+  Case c{std::move(name), paper_ms, std::move(model), {}};
   Setup& s = c.setup;
   s.effects.damping = true;
+  s.damping_alpha = damping_alpha;
+  s.duration = duration;
+  s.rigid_nodes = *node_set(c.model, rigid_set);
+  return c;
+}
+
+Case skin_block() {
+  Case c = damped_case("skin block", 1.48, make_skin_block_model(), 100, 1, "x_min");
+  Setup& s = c.setup;
   s.effects.loads = true;
-  s.damping_alpha = 100;
-  s.duration = 1;
-  s.rigid_nodes = *node_set(c.model, "x_min");
   PrescribedDisplacement p;
   p.nodes = *node_set(c.model, "x_max");
   p.components = {true, false, false};
@@ -57,26 +66,17 @@ Case skin_block() {
 }
 
 Case forehead() {
-  Case c{"face-scale forehead", 6.83, make_forehead_model(), {}};
+  Case c = damped_case("face-scale forehead", 6.83, make_forehead_model(), 100, 1, "y_max");
   Setup& s = c.setup;
-  s.effects.damping = true;
   s.effects.muscles = true;
   s.effects.sliding = true;
-  s.damping_alpha = 100;
-  s.duration = 1;
   s.activation = {Curve::ramp(0.05, 0.05), Curve::ramp(0.05, 0.05)};
-  s.rigid_nodes = *node_set(c.model, "y_max");
   return c;
 }
 
 Case soft_body() {
-  Case c{"15k multi-material body", 0.14, make_soft_body_model(), {}};
-  Setup& s = c.setup;
-  s.effects.damping = true;
-  s.effects.gravity = true;
-  s.damping_alpha = 20;
-  s.duration = 10;
-  s.rigid_nodes = *node_set(c.model, "feet");
+  Case c = damped_case("15k multi-material body", 0.14, make_soft_body_model(), 20, 10, "feet");
+  c.setup.effects.gravity = true;
   return c;
 }
 

@@ -14,46 +14,21 @@
 
 #include <omp.h>
 
-#include "sinew/common/math.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/simulator/engine.hpp"
-#include "sinew/simulator/physics/sliding.hpp"
+#include "sliding_height_field.hpp"
 
 using namespace sinew;
 using namespace sinew::simulator;
 
 namespace {
 
-formats::Material tissue(double mu, double nu, double rho, const char* name) {
-  return formats::make_neo_hookean_material(name, 2 * mu * (1 + nu), nu, rho);
-}
-
 // A skull-like sliding surface under the block: the height field
-// z = −0.5 mm + 0.3 mm · sin(2πx/20 mm) sin(2πy/20 mm) on a 1 mm grid over [−30, 30]² mm,
-// triangles counter-clockwise seen from above (+z, towards the block).
-formats::Surface wavy_surface(int& cells_per_side, double& spacing, double& x0) {
-  const int n = 60;
-  const double dx = 1e-3, start = -30e-3;
-  cells_per_side = n;
-  spacing = dx;
-  x0 = start;
-  formats::Surface s;
-  s.name = "skull";
-  s.role = formats::SurfaceRole::sliding;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      const double x = start + i * dx, y = start + j * dx;
-      s.vertices.push_back(
-          {x, y,
-           -0.5e-3 + 0.3e-3 * std::sin(2 * M_PI * x / 20e-3) * std::sin(2 * M_PI * y / 20e-3)});
-    }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      s.triangles.push_back({a, b, c});
-      s.triangles.push_back({a, c, d});
-    }
-  return s;
+// z = −0.5 mm + 0.3 mm · sin(2πx/20 mm) sin(2πy/20 mm) on a 1 mm grid over [−30, 30]² mm.
+bench::HeightField wavy_surface() {
+  return bench::make_height_field("skull", -30e-3, -30e-3, 1e-3, 60, 60, [](double x, double y) {
+    return -0.5e-3 + 0.3e-3 * std::sin(2 * M_PI * x / 20e-3) * std::sin(2 * M_PI * y / 20e-3);
+  });
 }
 
 formats::Model make_block(bool muscles, bool sliding) {
@@ -63,7 +38,7 @@ formats::Model make_block(bool muscles, bool sliding) {
   spec.dims = {nx, ny, nz};
   spec.voxel_size = h;
   spec.origin = {-0.5 * nx * h, -0.5 * ny * h, 0.0};
-  spec.materials = {tissue(1000, 0.49, 1000, "tissue")};
+  spec.materials = {formats::make_neo_hookean_material_from_shear("tissue", 1000, 0.49, 1000)};
   if (muscles) {
     formats::BoxMuscleSpec m;
     m.element_min = {0, 0, nz / 2};
@@ -74,39 +49,7 @@ formats::Model make_block(bool muscles, bool sliding) {
   }
   spec.created = "2026-01-01T00:00:00Z";
   formats::Model model = formats::make_box_model(spec);
-  if (sliding) {
-    int cells = 0;
-    double dx = 0, x0 = 0;
-    model.surfaces.push_back(wavy_surface(cells, dx, x0));
-    const auto& s = model.surfaces[0];
-    using V = Vec3<double>;
-    for (std::size_t n = 0; n < model.node_count(); ++n) {
-      if (model.node_lattice[n][2] != 0) continue;
-      const auto x = model.node_position(formats::Index(n));
-      const V p{x[0], x[1], x[2]};
-      // The surface is a gentle height field: the closest triangle lies within a few cells.
-      const int ci = int(std::floor((x[0] - x0) / dx)), cj = int(std::floor((x[1] - x0) / dx));
-      double best = 1e300;
-      int bt = 0;
-      for (int j = std::max(0, cj - 3); j <= std::min(cells - 1, cj + 3); ++j)
-        for (int i = std::max(0, ci - 3); i <= std::min(cells - 1, ci + 3); ++i)
-          for (int t = 0; t < 2; ++t) {
-            const int id = 2 * (j * cells + i) + t;
-            const auto& tri = s.triangles[std::size_t(id)];
-            const auto& a = s.vertices[std::size_t(tri[0])];
-            const auto& b = s.vertices[std::size_t(tri[1])];
-            const auto& c = s.vertices[std::size_t(tri[2])];
-            const double d =
-                norm(p - physics::closest_point_on_triangle(
-                             p, V{a[0], a[1], a[2]}, V{b[0], b[1], b[2]}, V{c[0], c[1], c[2]}));
-            if (d < best) {
-              best = d;
-              bt = id;
-            }
-          }
-      model.sliding.push_back({formats::Index(n), 0, best, bt});
-    }
-  }
+  if (sliding) bench::bind_bottom_to_height_field(model, wavy_surface(), 3);
   return model;
 }
 

@@ -91,6 +91,22 @@ def table(head, body):
 
 
 # ---- plots -------------------------------------------------------------------------------------
+def decorate(ax, xlabel, ylabel, title, **legend):
+    """Labels, title, legend (keyword arguments go to ax.legend) and a grid on both tick levels."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(**legend)
+    ax.grid(True, which="both", alpha=0.3)
+
+
+def save(fig, path):
+    """Writes the figure to path (PNG, 110 dpi) and closes it."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def plot_convergence(rows, path):
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
     for nu, mark, color in (("0.3", "o", "C0"), ("0.49", "s", "C1")):
@@ -114,19 +130,11 @@ def plot_convergence(rows, path):
         h0, h1 = min(hs), max(hs)
         e1 = max(es)
         a.loglog([h0, h1], [e1 * (h0 / h1) ** 2, e1], "k--", lw=1, label="slope h²")
-    a.set_xlabel("voxel side h (mm)")
-    a.set_ylabel("tip deflection error (vs Richardson)")
-    a.set_title("cantilever under its own weight: error vs h")
-    a.legend()
-    a.grid(True, which="both", alpha=0.3)
-    b.set_xlabel("wall time to static answer (s)")
-    b.set_ylabel("tip deflection error")
-    b.set_title("error vs wall time (lines: Pareto front per ν)")
-    b.legend()
-    b.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    decorate(a, "voxel side h (mm)", "tip deflection error (vs Richardson)",
+             "cantilever under its own weight: error vs h")
+    decorate(b, "wall time to static answer (s)", "tip deflection error",
+             "error vs wall time (lines: Pareto front per ν)")
+    save(fig, path)
 
 
 def plot_nu(rows, path):
@@ -146,14 +154,10 @@ def plot_nu(rows, path):
         ax.semilogx(x, y, style + "o", ms=4, label=f"{mod}, κ={g(kappa)}, n={n}")
     ax.axhline(1, color="k", lw=0.8)
     ax.invert_xaxis()
-    ax.set_xlabel("0.5 − ν (log; right = nearly incompressible)")
-    ax.set_ylabel("tip deflection / beam theory")
-    ax.set_title("near-incompressible bending: hourglass modulus M* = 2μ (shear) vs λ+2μ (p_wave)")
-    ax.legend(fontsize=7, ncol=2)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    decorate(ax, "0.5 − ν (log; right = nearly incompressible)", "tip deflection / beam theory",
+             "near-incompressible bending: hourglass modulus M* = 2μ (shear) vs λ+2μ (p_wave)",
+             fontsize=7, ncol=2)
+    save(fig, path)
     return True
 
 
@@ -172,11 +176,8 @@ def plot_forehead(rows, path):
     hs = [r["h_mm"] for r in rs]
     e1 = max(r["error"] for r in rs)
     a.loglog([min(hs), max(hs)], [e1 * (min(hs) / max(hs)) ** 2, e1], "k--", lw=1, label="slope h²")
-    a.set_xlabel("voxel side h (mm)")
-    a.set_ylabel("skin displacement error (relative)")
-    a.set_title("forehead patch, brow raise: error vs h")
-    a.legend(fontsize=8)
-    a.grid(True, which="both", alpha=0.3)
+    decorate(a, "voxel side h (mm)", "skin displacement error (relative)",
+             "forehead patch, brow raise: error vs h", fontsize=8)
     # Error vs cost, with every forehead and knob point at default time scaling.
     pts, labels = [], []
     for r in rs + [r for r in sel(rows, "knobs") if r["error_measure"].startswith("skin_max_vs_ref")
@@ -188,14 +189,9 @@ def plot_forehead(rows, path):
     b.plot([pts[i][0] for i in front], [pts[i][1] for i in front], "k-", lw=1.2, label="Pareto front")
     for i in front:
         b.annotate(labels[i], pts[i], textcoords="offset points", xytext=(4, 3), fontsize=7)
-    b.set_xlabel("wall time per simulated second (s)")
-    b.set_ylabel("skin displacement error (max, relative)")
-    b.set_title("error vs cost (Pareto front)")
-    b.legend(fontsize=8)
-    b.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    decorate(b, "wall time per simulated second (s)", "skin displacement error (max, relative)",
+             "error vs cost (Pareto front)", fontsize=8)
+    save(fig, path)
     return True
 
 
@@ -306,9 +302,7 @@ def plot_knobs(rows, path):
         ax.set_title("switches (forehead)", fontsize=9)
     for ax in axes.flat:
         ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
     return any_
 
 
@@ -332,30 +326,31 @@ def plot_effects(rows, path):
                  f"{int(rs[0]['elements'])} elements)")
     ax.legend()
     ax.grid(True, axis="y", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
     return True
 
 
 # ---- tables ------------------------------------------------------------------------------------
+def para(out, text):
+    """Appends a Markdown paragraph (text, then a blank line) to the list of lines out."""
+    out += [text, ""]
+
+
 def tables(header, rows, label, images_rel):
     out = [f"Run `{label}`. Provenance (from the CSV header):", ""]
     out += [f"- {h}" for h in header]
     out.append("")
     conv = sel(rows, "convergence", "per_edge")
     if conv:
-        out.append("**Convergence (cantilever under its own weight)**: tip deflection error against the "
-                   "Richardson extrapolation of the three finest meshes; also against beam theory.")
-        out.append("")
+        para(out, "**Convergence (cantilever under its own weight)**: tip deflection error against the "
+                  "Richardson extrapolation of the three finest meshes; also against beam theory.")
         body = []
         for r in conv:
             body.append([g(r["nu"]), int(r["per_edge"]), g(r["h_mm"]), int(r["elements"]),
                          g(r["dt_s"]), int(r["steps"]), g(r["wall_s"]), g(r["wall_per_step_us"]),
                          pct(r["error"]), pct(r["error_rms"]), r["status"]])
-        out.append(table(["ν", "n", "h (mm)", "elements", "Δt (s)", "steps", "wall (s)",
-                          "µs/step", "error vs Richardson", "vs beam theory", "status"], body))
-        out.append("")
+        para(out, table(["ν", "n", "h (mm)", "elements", "Δt (s)", "steps", "wall (s)",
+                         "µs/step", "error vs Richardson", "vs beam theory", "status"], body))
         for r in sel(rows, "convergence", "reference"):
             out.append(f"- ν = {g(r['nu'])}: reference tip deflection {g(r['measured'], 6)} m "
                        f"({r['value']}, observed order {g(r['error'])}); reference / beam theory − 1 "
@@ -366,13 +361,11 @@ def tables(header, rows, label, images_rel):
                 p = slope([r["h_mm"] for r in rs], [r["error"] for r in rs])
                 out.append(f"- ν = {nu}: least-squares slope of log error vs log h over n ≥ 2: {g(p)}.")
         out.append("")
-        out.append(f"![convergence]({images_rel}/{label}_convergence.png)")
-        out.append("")
+        para(out, f"![convergence]({images_rel}/{label}_convergence.png)")
     nus = sel(rows, "nu_sweep", "nu")
     if nus:
-        out.append("**Near-incompressible bending**: tip deflection / beam theory (1 = beam theory; "
-                   "below 1 = too stiff, locking).")
-        out.append("")
+        para(out, "**Near-incompressible bending**: tip deflection / beam theory (1 = beam theory; "
+                  "below 1 = too stiff, locking).")
         cols = sorted({(r["hourglass_modulus"], r["kappa"], int(r["per_edge"])) for r in nus})
         nuv = sorted({r["nu"] for r in nus})
         body = []
@@ -384,40 +377,33 @@ def tables(header, rows, label, images_rel):
                 row.append(g(1 + m[0]["error"], 4) if m and m[0]["status"] == "ok"
                            else (m[0]["status"] if m else "–"))
             body.append(row)
-        out.append(table(["ν"] + [f"{m}, κ {g(k)}, n {n}" for m, k, n in cols], body))
-        out.append("")
+        para(out, table(["ν"] + [f"{m}, κ {g(k)}, n {n}" for m, k, n in cols], body))
         w = [r for r in nus if r["status"] == "ok"]
         if w:
             slow = max(w, key=lambda r: r["wall_s"])
-            out.append(f"Slowest point: ν = {g(slow['nu'], 5)} ({slow['hourglass_modulus']}, n = "
-                       f"{int(slow['per_edge'])}): {int(slow['steps'])} steps, Δt = {g(slow['dt_s'])} s, "
-                       f"{g(slow['wall_s'])} s wall.")
-            out.append("")
-        out.append(f"![nu sweep]({images_rel}/{label}_nu_sweep.png)")
-        out.append("")
+            para(out, f"Slowest point: ν = {g(slow['nu'], 5)} ({slow['hourglass_modulus']}, n = "
+                      f"{int(slow['per_edge'])}): {int(slow['steps'])} steps, Δt = {g(slow['dt_s'])} s, "
+                      f"{g(slow['wall_s'])} s wall.")
+        para(out, f"![nu sweep]({images_rel}/{label}_nu_sweep.png)")
     fh = sel(rows, "forehead")
     if fh:
-        out.append("**Forehead patch, brow raise**: skin (top surface) displacement at 40 ms against "
-                   "the reference, max and rms over 153 points, relative to the reference's largest "
-                   "skin displacement.")
-        out.append("")
+        para(out, "**Forehead patch, brow raise**: skin (top surface) displacement at 40 ms against "
+                  "the reference, max and rms over 153 points, relative to the reference's largest "
+                  "skin displacement.")
         body = []
         for r in fh:
             body.append([r["knob"], r["precision"], g(r["h_mm"]), int(r["elements"]), g(r["dt_s"]),
                          int(r["steps"]), g(r["wall_s"]), g(r["wall_per_step_us"]),
                          g(r["wall_per_sim_s"]), pct(r["error"]), pct(r["error_rms"]),
                          g(r["measured"]), r["status"]])
-        out.append(table(["run", "precision", "h (mm)", "elements", "Δt (s)", "steps", "wall (s)",
-                          "µs/step", "wall s per simulated s", "skin error max", "rms",
-                          "largest skin displacement (m)", "status"], body))
-        out.append("")
-        out.append(f"![forehead]({images_rel}/{label}_forehead.png)")
-        out.append("")
+        para(out, table(["run", "precision", "h (mm)", "elements", "Δt (s)", "steps", "wall (s)",
+                         "µs/step", "wall s per simulated s", "skin error max", "rms",
+                         "largest skin displacement (m)", "status"], body))
+        para(out, f"![forehead]({images_rel}/{label}_forehead.png)")
     kn = sel(rows, "knobs")
     if kn:
-        out.append("**Knobs one at a time** (forehead patch at the h of the `baseline` row unless "
-                   "the knob says beam; error measure per row):")
-        out.append("")
+        para(out, "**Knobs one at a time** (forehead patch at the h of the `baseline` row unless "
+                  "the knob says beam; error measure per row):")
         body = []
         for r in kn:
             body.append([r["knob"], r["value"], r["precision"], g(r["h_mm"]), g(r["dt_s"]),
@@ -425,22 +411,17 @@ def tables(header, rows, label, images_rel):
                          pct(r["error"]) if r["knob"] != "kappa_beam" else g(r["error"]),
                          pct(r["error_rms"]), g(r["hourglass_ratio"]), r["error_measure"],
                          r["status"]])
-        out.append(table(["knob", "value", "precision", "h (mm)", "Δt (s)", "steps", "wall (s)",
-                          "µs/step", "error (max)", "rms", "hourglass/strain", "against", "status"],
-                         body))
-        out.append("")
-        out.append(f"![knobs]({images_rel}/{label}_knobs.png)")
-        out.append("")
+        para(out, table(["knob", "value", "precision", "h (mm)", "Δt (s)", "steps", "wall (s)",
+                         "µs/step", "error (max)", "rms", "hourglass/strain", "against", "status"],
+                        body))
+        para(out, f"![knobs]({images_rel}/{label}_knobs.png)")
     ef = sel(rows, "effects")
     if ef:
-        out.append("**Cost of each effect** (time per step, fixed number of steps):")
-        out.append("")
+        para(out, "**Cost of each effect** (time per step, fixed number of steps):")
         body = [[r["value"], r["precision"], int(r["elements"]), int(r["steps"]),
                  g(r["wall_per_step_us"])] for r in ef]
-        out.append(table(["effects", "precision", "elements", "steps", "µs/step"], body))
-        out.append("")
-        out.append(f"![effects]({images_rel}/{label}_effects.png)")
-        out.append("")
+        para(out, table(["effects", "precision", "elements", "steps", "µs/step"], body))
+        para(out, f"![effects]({images_rel}/{label}_effects.png)")
     return "\n".join(out)
 
 

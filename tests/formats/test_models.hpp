@@ -29,18 +29,18 @@ inline Model every_feature_model() {
   spec.materials = {make_neo_hookean_material("fat", 3000, 0.49, 900),
                     make_neo_hookean_material("muscle_tissue", 11000, 0.45, 1060)};
   spec.layer_boundaries = {1.5e-3};
-  BoxMuscleSpec left;
-  left.name = "frontalis_left";
-  left.material = 1;
-  left.element_min = {0, 0, 1};
-  left.element_max = {2, 3, 3};
-  left.fibre = {0, 0, 2};
-  BoxMuscleSpec right;
-  right.name = "frontalis_right";
-  right.material = 1;
-  right.element_min = {2, 0, 1};
-  right.element_max = {4, 3, 3};
-  right.fibre = {1, 1, 0};
+  // Two muscles over material 1, the left one with the generator's defaults.
+  auto muscle = [](const char* name, Lattice element_min, Lattice element_max, Point fibre) {
+    BoxMuscleSpec m;
+    m.name = name;
+    m.material = 1;
+    m.element_min = element_min;
+    m.element_max = element_max;
+    m.fibre = fibre;
+    return m;
+  };
+  const BoxMuscleSpec left = muscle("frontalis_left", {0, 0, 1}, {2, 3, 3}, {0, 0, 2});
+  BoxMuscleSpec right = muscle("frontalis_right", {2, 0, 1}, {4, 3, 3}, {1, 1, 0});
   right.fraction = 0.6;
   right.reference_stress = 3e5;
   right.optimal_stretch = 1.1;

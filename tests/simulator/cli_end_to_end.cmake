@@ -14,13 +14,7 @@ function(expect message)
   endif()
 endfunction()
 
-file(REMOVE_RECURSE "${WORK}")
-file(MAKE_DIRECTORY "${WORK}")
-file(COPY "${SCENES}/box_compression.yaml" DESTINATION "${WORK}")
-execute_process(COMMAND "${GENERATE}" box --dims 8 8 8 --voxel-size 0.0025
-                        --material soft:3000:0.45:1000 -o "${WORK}/compression_block.h5" -q
-                RESULT_VARIABLE rc)
-expect("sinew-generate box" rc EQUAL 0)
+include("${CMAKE_CURRENT_LIST_DIR}/compression_block.cmake")
 
 # 1. A full run.
 execute_process(COMMAND "${SIMULATE}" "${WORK}/box_compression.yaml" -o "${WORK}/out" --quiet --threads 2

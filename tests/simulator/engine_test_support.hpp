@@ -83,14 +83,7 @@ inline const std::vector<NamedBackend>& every_backend() {
 // A TLED neo-Hookean material from μ and ν.
 inline formats::Material neo_hookean(double mu, double nu, double density = 1000.0,
                                      const std::string& name = "tissue") {
-  formats::Material m;
-  m.name = name;
-  m.youngs_modulus = 2 * mu * (1 + nu);
-  m.poisson_ratio = nu;
-  m.shear_modulus = mu;
-  m.bulk_modulus = m.youngs_modulus / (3 * (1 - 2 * nu));
-  m.density = density;
-  return m;
+  return formats::make_neo_hookean_material_from_shear(name, mu, nu, density);
 }
 
 // A block of nx × ny × nz cubes of side h with one material.

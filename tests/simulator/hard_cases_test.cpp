@@ -60,6 +60,31 @@ double p_wave(const formats::Material& m) {
   return m.bulk_modulus + 4 * m.shear_modulus / 3;
 }
 
+// Confined compression along x: every node held in y and z, the face x = 0 held in x, and the
+// face at lattice x = `end` moved by `push` (m) along x on a ramp of `ramp` s, then held. Returns
+// the nodes of that face.
+std::vector<Index> confined_compression(SimSetup& s, const formats::Model& model, int end,
+                                        double push, double ramp) {
+  PrescribedDisplacement lateral;
+  for (std::size_t i = 0; i < model.node_count(); ++i) lateral.nodes.push_back(Index(i));
+  lateral.components = {false, true, true};
+  s.prescribed.push_back(lateral);
+  s.prescribed.push_back({nodes_at(model, 0, 0), {true, false, false}, {0, 0, 0}, {}});
+  s.prescribed.push_back(
+      {nodes_at(model, 0, end), {true, false, false}, {push, 0, 0}, Curve::ramp(ramp, 1)});
+  return s.prescribed.back().nodes;
+}
+
+// Runs `steps` steps: the message of the InstabilityError that stopped them, "" when none did.
+std::string instability_message(Backend& b, std::int64_t steps) {
+  try {
+    b.step(steps);
+  } catch (const InstabilityError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 // Tracks, over a driven run, the largest excess of the mechanical energy (kinetic + strain +
 // hourglass) over the external work done on the body. With mass-proportional damping the exact
 // balance is E_mech = W_ext − (damping losses) ≤ W_ext; central differences conserve a shadow
@@ -89,15 +114,8 @@ TEST_P(HardNu, ConfinedCompressionMatchesClosedFormAtTheAutomaticStep) {
   const auto mat = neo_hookean(kMu, nu, kRho);
   const auto model = block(n, n, n, kH, mat);
   SimSetup s = static_setup(0);
-  PrescribedDisplacement lateral;
-  for (std::size_t i = 0; i < model.node_count(); ++i) lateral.nodes.push_back(Index(i));
-  lateral.components = {false, true, true};
-  s.prescribed.push_back(lateral);
-  s.prescribed.push_back({nodes_at(model, 0, 0), {true, false, false}, {0, 0, 0}, {}});
   const double ramp = 0.01;
-  PrescribedDisplacement push{
-      nodes_at(model, 0, n), {true, false, false}, {(stretch - 1) * l, 0, 0}, Curve::ramp(ramp, 1)};
-  s.prescribed.push_back(push);
+  const auto pushed = confined_compression(s, model, n, (stretch - 1) * l, ramp);
   const double cd = std::sqrt(p_wave(mat) / kRho);
   s.damping_alpha = 2 * M_PI * cd / l;  // ≈ critical for the 1-D dilatational mode
   auto b = backend.make(model, s);
@@ -118,7 +136,7 @@ TEST_P(HardNu, ConfinedCompressionMatchesClosedFormAtTheAutomaticStep) {
     ke = e.kinetic;
     if (ke < 1e-12 * u_expected) break;
   }
-  const double p11 = b->reaction(push.nodes)[0] / (l * l);
+  const double p11 = b->reaction(pushed)[0] / (l * l);
   const double expected = nominal_principal(kMu, mat.bulk_modulus, st, 0);
   const auto en = b->energies();
   ASSERT_TRUE(all_finite(b->displacements()));
@@ -258,15 +276,8 @@ TEST_P(Contrast, MixedCorneumHypodermisVoxelIsStableAndFollowsTheMixtureRule) {
   const auto one = formats::make_box_model(skin_spec(1, 1, 1, h));
   ASSERT_EQ(one.material_offsets[1] - one.material_offsets[0], 2);
   SimSetup s = static_setup(0);
-  PrescribedDisplacement lateral;
-  for (std::size_t i = 0; i < one.node_count(); ++i) lateral.nodes.push_back(Index(i));
-  lateral.components = {false, true, true};
-  s.prescribed.push_back(lateral);
-  s.prescribed.push_back({nodes_at(one, 0, 0), {true, false, false}, {0, 0, 0}, {}});
   const double stretch = 0.9, ramp = 2e-4;
-  PrescribedDisplacement push{
-      nodes_at(one, 0, 1), {true, false, false}, {(stretch - 1) * h, 0, 0}, Curve::ramp(ramp, 1)};
-  s.prescribed.push_back(push);
+  const auto pushed = confined_compression(s, one, 1, (stretch - 1) * h, ramp);
   const double m_mix = (1 - w) * p_wave(hyp) + w * p_wave(sc);
   const double c_mix = std::sqrt(m_mix / 11000);
   s.damping_alpha = 2 * M_PI * c_mix / h;
@@ -287,7 +298,7 @@ TEST_P(Contrast, MixedCorneumHypodermisVoxelIsStableAndFollowsTheMixtureRule) {
     bound.sample(e);
     if (e.kinetic < 1e-12 * u_expected) break;
   }
-  const double p11 = b->reaction(push.nodes)[0] / (h * h);
+  const double p11 = b->reaction(pushed)[0] / (h * h);
   const double expected = (1 - w) * nominal_principal(hyp.shear_modulus, hyp.bulk_modulus, st, 0) +
                           w * nominal_principal(sc.shear_modulus, sc.bulk_modulus, st, 0);
   EXPECT_LT(rel(p11, expected), 1e-3);
@@ -738,12 +749,7 @@ TEST_P(HardCase, TimeStepAboveCriticalIsRefusedOrStopped) {
   s.time_step.policy = TimeStepPolicy::forced;
   auto b = make(model, s);
   EXPECT_FALSE(b->plan().warnings.empty());
-  std::string stopped;
-  try {
-    b->step(2000);
-  } catch (const InstabilityError& e) {
-    stopped = e.what();
-  }
+  const std::string stopped = instability_message(*b, 2000);
   ASSERT_FALSE(stopped.empty()) << "1.5 × Δt_crit ran 2000 steps unnoticed";
   EXPECT_TRUE(contains(stopped, "at step ")) << stopped;
   EXPECT_TRUE(contains(stopped, "position") || contains(stopped, "rest centre")) << stopped;

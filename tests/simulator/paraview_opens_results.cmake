@@ -10,15 +10,7 @@ if(NOT PVPYTHON)
   message("pvpython not found: skipped (apt-get install paraview to run this test)")
   return()
 endif()
-file(REMOVE_RECURSE "${WORK}")
-file(MAKE_DIRECTORY "${WORK}")
-file(COPY "${SCENES}/box_compression.yaml" DESTINATION "${WORK}")
-execute_process(COMMAND "${GENERATE}" box --dims 8 8 8 --voxel-size 0.0025
-                        --material soft:3000:0.45:1000 -o "${WORK}/compression_block.h5" -q
-                RESULT_VARIABLE rc)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "FAILED: sinew-generate box exited ${rc}")
-endif()
+include("${CMAKE_CURRENT_LIST_DIR}/compression_block.cmake")
 execute_process(COMMAND "${SIMULATE}" "${WORK}/box_compression.yaml" -o "${WORK}/out" --quiet
                 RESULT_VARIABLE rc ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)

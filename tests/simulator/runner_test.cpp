@@ -96,6 +96,13 @@ probes:
   - {name: wall, type: reaction, set: x_min}
 )";
 
+// Writes the block model and kMuscleScene into dir; returns the scene's path.
+std::string write_muscle_scene(const TempDir& dir) {
+  write_model(dir);
+  write_file(dir / "scene.yaml", kMuscleScene);
+  return dir / "scene.yaml";
+}
+
 RunOptions options_for(const std::string& scene, const std::string& out) {
   RunOptions o;
   o.scene_path = scene;
@@ -108,17 +115,16 @@ RunOptions options_for(const std::string& scene, const std::string& out) {
 
 TEST(Runner, ResumedRunIsBitIdenticalToAnUninterruptedOne) {
   TempDir dir("restart");
-  write_model(dir);
-  write_file(dir / "scene.yaml", kMuscleScene);
+  const std::string scene = write_muscle_scene(dir);
 
-  auto full = options_for(dir / "scene.yaml", dir / "full");
+  auto full = options_for(scene, dir / "full");
   full.threads = 2;
   const auto a = run_scene(full);
   ASSERT_EQ(a.summary.status, "completed");
   ASSERT_GT(a.summary.steps_done, 60);
 
   // Cut at a step that is neither a frame nor a probe step, then resume on another thread count.
-  auto first = options_for(dir / "scene.yaml", dir / "cut");
+  auto first = options_for(scene, dir / "cut");
   first.threads = 2;
   first.stop_at_step = 37;
   const auto b = run_scene(first);
@@ -126,7 +132,7 @@ TEST(Runner, ResumedRunIsBitIdenticalToAnUninterruptedOne) {
   EXPECT_EQ(b.summary.steps_done, 37);
   ASSERT_TRUE(std::filesystem::exists(dir / "cut/checkpoint.h5"));
 
-  auto second = options_for(dir / "scene.yaml", dir / "cut");
+  auto second = options_for(scene, dir / "cut");
   second.threads = 1;
   second.restart = dir / "cut/checkpoint.h5";
   const auto c = run_scene(second);
@@ -157,17 +163,16 @@ TEST(Runner, ResumedRunIsBitIdenticalToAnUninterruptedOne) {
 TEST(Runner, ResumedCudaRunIsBitIdentical) {
   if (!cuda_device_available()) GTEST_SKIP() << "no CUDA device";
   TempDir dir("restart_cuda");
-  write_model(dir);
-  write_file(dir / "scene.yaml", kMuscleScene);
-  auto full = options_for(dir / "scene.yaml", dir / "full");
+  const std::string scene = write_muscle_scene(dir);
+  auto full = options_for(scene, dir / "full");
   full.device = "cuda";
   const auto a = run_scene(full);
   ASSERT_EQ(a.summary.status, "completed");
-  auto first = options_for(dir / "scene.yaml", dir / "cut");
+  auto first = options_for(scene, dir / "cut");
   first.device = "cuda";
   first.stop_at_step = 41;
   run_scene(first);
-  auto second = options_for(dir / "scene.yaml", dir / "cut");
+  auto second = options_for(scene, dir / "cut");
   second.device = "cuda";
   second.restart = dir / "cut/checkpoint.h5";
   const auto c = run_scene(second);
@@ -184,13 +189,12 @@ TEST(Runner, ResumedCudaRunIsBitIdentical) {
 
 TEST(Runner, RestartRefusesAnotherScene) {
   TempDir dir("restart_digest");
-  write_model(dir);
-  write_file(dir / "scene.yaml", kMuscleScene);
-  auto first = options_for(dir / "scene.yaml", dir / "out");
+  const std::string scene = write_muscle_scene(dir);
+  auto first = options_for(scene, dir / "out");
   first.stop_at_step = 5;
   run_scene(first);
   write_file(dir / "scene.yaml", std::string(kMuscleScene) + "title: changed\n");
-  auto second = options_for(dir / "scene.yaml", dir / "out");
+  auto second = options_for(scene, dir / "out");
   second.restart = dir / "out/checkpoint.h5";
   EXPECT_THROW(run_scene(second), ConfigError);
   write_file(dir / "scene.yaml", kMuscleScene);
@@ -200,9 +204,8 @@ TEST(Runner, RestartRefusesAnotherScene) {
 
 TEST(Runner, CheckpointEveryNStepsKeepsTheLatest) {
   TempDir dir("checkpoint_every");
-  write_model(dir);
-  write_file(dir / "scene.yaml", kMuscleScene);
-  auto o = options_for(dir / "scene.yaml", dir / "out");
+  const std::string scene = write_muscle_scene(dir);
+  auto o = options_for(scene, dir / "out");
   o.checkpoint_every = 20;
   o.stop_at_step = 50;
   run_scene(o);
@@ -268,9 +271,8 @@ output: {{interval: {}}}
 
 TEST(Runner, ExplainPrintsThePlanAndWritesNothing) {
   TempDir dir("explain");
-  write_model(dir);
-  write_file(dir / "scene.yaml", kMuscleScene);
-  auto o = options_for(dir / "scene.yaml", dir / "out");
+  const std::string scene = write_muscle_scene(dir);
+  auto o = options_for(scene, dir / "out");
   std::string text;
   o.print = [&](const std::string& s) { text += s; };
   o.explain = true;
@@ -287,9 +289,8 @@ TEST(Runner, ExplainPrintsThePlanAndWritesNothing) {
 // there is none (or the build has no CUDA backend).
 TEST(Runner, CudaDeviceRunsOrIsAClearError) {
   TempDir dir("cuda");
-  write_model(dir);
-  write_file(dir / "scene.yaml", kMuscleScene);
-  auto o = options_for(dir / "scene.yaml", dir / "out");
+  const std::string scene = write_muscle_scene(dir);
+  auto o = options_for(scene, dir / "out");
   o.device = "cuda";
   if (cuda_device_available()) {
     const auto r = run_scene(o);

@@ -64,12 +64,7 @@ resolution: {voxel_size: )" +
          std::to_string(voxel_mm) + R"(}
 outer: {sphere: {radius: 6}, subdivisions: 5}
 inner: {sphere: {radius: 3}, subdivisions: 5}
-materials: {preset: warburton2013}
-layers:
-  - {material: stratum_corneum, thickness: 0.02}
-  - {material: dermis, thickness: 1.8}
-  - {material: hypodermis}
-)";
+)" + testing::kPaperLayers;
 }
 
 struct Shells {

@@ -21,17 +21,12 @@ namespace {
 using testing::run_spec;
 using testing::TempDir;
 
-const char* kLayered = R"(
+const std::string kLayered = R"(
 units: mm
 resolution: {voxel_size: 0.8}
 outer: {sphere: {radius: 8}, subdivisions: 4}
 inner: {sphere: {radius: 4}, subdivisions: 4}
-materials: {preset: warburton2013}
-layers:
-  - {material: stratum_corneum, thickness: 0.02}
-  - {material: dermis, thickness: 1.8}
-  - {material: hypodermis}
-muscles:
+)" + testing::kPaperLayers + R"(muscles:
   - name: band
     mesh: {cylinder: {centre: [0, -6, 0], radius: 1, half_length: 3}, subdivisions: 2}
     material: muscle

@@ -49,6 +49,15 @@ inline void write_obj(const TriangleMesh& mesh, const std::filesystem::path& pat
   }
 }
 
+// Spec lines (units: mm) for the paper's skin (Warburton & Maddock 2013): its material preset and
+// the three layers from the outer surface in, stratum corneum 0.02 mm, dermis 1.8 mm, hypodermis.
+inline const std::string kPaperLayers = R"(materials: {preset: warburton2013}
+layers:
+  - {material: stratum_corneum, thickness: 0.02}
+  - {material: dermis, thickness: 1.8}
+  - {material: hypodermis}
+)";
+
 inline VoxelizeResult run_spec(const std::string& yaml, const std::filesystem::path& file,
                                int threads = 0) {
   VoxelizeOptions options;

@@ -129,13 +129,8 @@ TEST(RealMeshes, HeadScanWithDerivedInnerSurfaceGivesLayeredTissue) {
       "outer: {path: " +
           mesh_path("lee_perry_smith_head.obj").string() +
           ", unit: m, scale: 0.3333}\n"
-          R"(tissue_thickness: 6
-materials: {preset: warburton2013}
-layers:
-  - {material: stratum_corneum, thickness: 0.02}
-  - {material: dermis, thickness: 1.8}
-  - {material: hypodermis}
-boundary:
+          "tissue_thickness: 6\n" +
+          testing::kPaperLayers + R"(boundary:
   - {type: rigid, inside: true}
   - {type: sliding, within: 1.0}
 )",

@@ -5,22 +5,18 @@
 
 #include <string>
 
+#include "pipeline_test_util.hpp"
 #include "sinew/common/error.hpp"
 
 namespace sinew::voxelizer {
 namespace {
 
-const char* kMinimal = R"(
+const std::string kMinimal = R"(
 units: mm
 output: out.h5
 resolution: {voxel_size: 0.5}
 outer: {sphere: {radius: 10}}
-materials: {preset: warburton2013}
-layers:
-  - {material: stratum_corneum, thickness: 0.02}
-  - {material: dermis, thickness: 1.8}
-  - {material: hypodermis}
-)";
+)" + testing::kPaperLayers;
 
 // Parses text and returns the ConfigError message ("" when it parsed).
 std::string config_error(const std::string& text) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -57,6 +58,18 @@ nlohmann::ordered_json spec_json(const BoxSpec& s) {
 }
 
 }  // namespace
+
+Material make_neo_hookean_material_from_shear(std::string name, double shear_modulus,
+                                              double poisson_ratio, double density) {
+  Material m;
+  m.name = std::move(name);
+  m.youngs_modulus = 2 * shear_modulus * (1 + poisson_ratio);
+  m.poisson_ratio = poisson_ratio;
+  m.shear_modulus = shear_modulus;  // as given, not through E
+  m.bulk_modulus = shear_and_bulk_modulus(m.youngs_modulus, poisson_ratio).bulk_modulus;
+  m.density = density;
+  return m;
+}
 
 Model make_box_model(const BoxSpec& spec) {
   const auto& d = spec.dims;

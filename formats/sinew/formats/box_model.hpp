@@ -56,4 +56,10 @@ inline constexpr std::array<const char*, 6> kBoxFaces = {"x_min", "x_max", "y_mi
 // provenance records the tool "sinew::formats::make_box_model" and every spec value as JSON.
 Model make_box_model(const BoxSpec& spec);
 
+// A TLED neo-Hookean material stated by its shear modulus μ (Pa), as in physics-notes §7, rather
+// than by E as make_neo_hookean_material takes it: E = 2μ(1+ν), κ = E / (3(1−2ν)), μ kept exactly
+// as given.
+Material make_neo_hookean_material_from_shear(std::string name, double shear_modulus,
+                                              double poisson_ratio, double density);
+
 }  // namespace sinew::formats

@@ -67,15 +67,11 @@ struct DistanceQuery::Impl {
 };
 
 DistanceQuery::DistanceQuery(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
-  const std::int64_t nv = static_cast<std::int64_t>(mesh.vertices.size());
+  check_triangle_indices(mesh);
   impl_->triangles.reserve(mesh.triangles.size());
   impl_->index.reserve(mesh.triangles.size());
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
     const auto& t = mesh.triangles[i];
-    for (int k = 0; k < 3; ++k)
-      if (t[k] < 0 || t[k] >= nv)
-        throw GeometryError(mesh.source, "triangles", "vertex index out of range")
-            .at(static_cast<std::int64_t>(i));
     const Vec3d& a = mesh.vertices[t[0]];
     const Vec3d& b = mesh.vertices[t[1]];
     const Vec3d& c = mesh.vertices[t[2]];

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -12,6 +13,25 @@
 #include "sinew/common/error.hpp"
 
 namespace sinew::voxelizer {
+
+namespace {
+
+// The corners of triangle t of mesh.
+std::array<Vec3d, 3> corners(const TriangleMesh& mesh, std::size_t t) {
+  const auto& tri = mesh.triangles[t];
+  return {mesh.vertices[static_cast<std::size_t>(tri[0])],
+          mesh.vertices[static_cast<std::size_t>(tri[1])],
+          mesh.vertices[static_cast<std::size_t>(tri[2])]};
+}
+
+// Unit normal of the counter-clockwise triangle (a, b, c); `degenerate` when it has no area.
+Vec3d unit_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& degenerate) {
+  const Vec3d n = cross(b - a, c - a);
+  const double len = norm(n);
+  return len > 0 ? (1.0 / len) * n : degenerate;
+}
+
+}  // namespace
 
 SignedField::SignedField(const TriangleMesh& mesh, bool watertight, bool closed)
     : mesh_(mesh),
@@ -28,12 +48,8 @@ SignedField::SignedField(const TriangleMesh& mesh, bool watertight, bool closed)
   std::map<std::pair<std::int32_t, std::int32_t>, Vec3d> edge_sum;
   for (std::size_t t = 0; t < nt; ++t) {
     const auto& tri = mesh_.triangles[t];
-    const Vec3d& a = mesh_.vertices[static_cast<std::size_t>(tri[0])];
-    const Vec3d& b = mesh_.vertices[static_cast<std::size_t>(tri[1])];
-    const Vec3d& c = mesh_.vertices[static_cast<std::size_t>(tri[2])];
-    Vec3d n = cross(b - a, c - a);
-    const double len = norm(n);
-    n = len > 0 ? (1.0 / len) * n : Vec3d{0, 0, 0};
+    const auto [a, b, c] = corners(mesh_, t);
+    const Vec3d n = unit_normal(a, b, c, Vec3d{0, 0, 0});
     face_normal_[t] = n;
     const Vec3d* v[3] = {&a, &b, &c};
     for (int k = 0; k < 3; ++k) {
@@ -58,9 +74,7 @@ SignedField::SignedField(const TriangleMesh& mesh, bool watertight, bool closed)
 bool SignedField::pseudonormal_inside(const Vec3d& p, const DistanceQuery::Hit& hit) const {
   const auto t = static_cast<std::size_t>(hit.triangle);
   const auto& tri = mesh_.triangles[t];
-  const Vec3d& a = mesh_.vertices[static_cast<std::size_t>(tri[0])];
-  const Vec3d& b = mesh_.vertices[static_cast<std::size_t>(tri[1])];
-  const Vec3d& c = mesh_.vertices[static_cast<std::size_t>(tri[2])];
+  const auto [a, b, c] = corners(mesh_, t);
   // Barycentric coordinates of the closest point decide its feature.
   const Vec3d v0 = b - a, v1 = c - a, v2 = hit.point - a;
   const double d00 = dot(v0, v0), d01 = dot(v0, v1), d11 = dot(v1, v1);
@@ -117,13 +131,8 @@ SignedField::Sample SignedField::operator()(const Vec3d& p) const {
     s.gradient = inside ? d : -d;
   } else {
     // On the surface: the triangle normal, pointing to where the winding number says inside.
-    const auto& t = mesh_.triangles[static_cast<std::size_t>(hit.triangle)];
-    const Vec3d& a = mesh_.vertices[static_cast<std::size_t>(t[0])];
-    const Vec3d& b = mesh_.vertices[static_cast<std::size_t>(t[1])];
-    const Vec3d& c = mesh_.vertices[static_cast<std::size_t>(t[2])];
-    Vec3d n = cross(b - a, c - a);
-    const double len = norm(n);
-    n = len > 0 ? (1.0 / len) * n : Vec3d{0, 0, 1};
+    const auto [a, b, c] = corners(mesh_, static_cast<std::size_t>(hit.triangle));
+    const Vec3d n = unit_normal(a, b, c, Vec3d{0, 0, 1});
     const double step = 1e-6 * scale;
     s.gradient = winding_(p + step * n) >= winding_(p - step * n) ? n : -n;
   }

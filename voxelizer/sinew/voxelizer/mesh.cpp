@@ -349,16 +349,21 @@ MeshDiagnostics describe_mesh(const TriangleMesh& mesh) {
   return d;
 }
 
-MeshDiagnostics clean_mesh(TriangleMesh& mesh, double weld_tolerance) {
-  if (!(weld_tolerance >= 0))
-    throw GeometryError(mesh.source, "weld_tolerance", "must be a non-negative number");
-  MeshDiagnostics d;
+void check_triangle_indices(const TriangleMesh& mesh) {
   const std::int64_t n = static_cast<std::int64_t>(mesh.vertices.size());
   for (const auto& t : mesh.triangles)
     for (int k = 0; k < 3; ++k)
       if (t[k] < 0 || t[k] >= n)
         throw GeometryError(mesh.source, "triangles", "vertex index out of range")
             .at(&t - mesh.triangles.data());
+}
+
+MeshDiagnostics clean_mesh(TriangleMesh& mesh, double weld_tolerance) {
+  if (!(weld_tolerance >= 0))
+    throw GeometryError(mesh.source, "weld_tolerance", "must be a non-negative number");
+  MeshDiagnostics d;
+  check_triangle_indices(mesh);
+  const std::int64_t n = static_cast<std::int64_t>(mesh.vertices.size());
 
   const std::vector<std::int64_t> remap = weld_map(mesh.vertices, weld_tolerance);
   for (std::int64_t i = 0; i < n; ++i)

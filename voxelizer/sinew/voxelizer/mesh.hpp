@@ -108,6 +108,10 @@ struct MeshDiagnostics {
 // copes with them. Throws GeometryError if weld_tolerance is negative or NaN.
 MeshDiagnostics clean_mesh(TriangleMesh& mesh, double weld_tolerance);
 
+// Throws GeometryError ("triangles": "vertex index out of range", at the first such triangle)
+// unless every corner of every triangle names a vertex of the mesh.
+void check_triangle_indices(const TriangleMesh& mesh);
+
 // Diagnostics of a mesh as it is (no welding, nothing removed).
 MeshDiagnostics describe_mesh(const TriangleMesh& mesh);
 

@@ -256,12 +256,7 @@ WindingNumber::WindingNumber(const TriangleMesh& mesh, double accuracy_beta)
     throw GeometryError(mesh.source, "triangles", "winding number of a mesh without triangles");
   if (!(accuracy_beta > 1.0))
     throw GeometryError(mesh.source, "accuracy_beta", "must be greater than 1");
-  const std::int64_t nv = static_cast<std::int64_t>(mesh.vertices.size());
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k)
-      if (t[k] < 0 || t[k] >= nv)
-        throw GeometryError(mesh.source, "triangles", "vertex index out of range")
-            .at(&t - mesh.triangles.data());
+  check_triangle_indices(mesh);
   impl_->beta = accuracy_beta;
   const auto nt = static_cast<std::int32_t>(mesh.triangles.size());
   std::vector<Vec3d> centroid(static_cast<std::size_t>(nt));
