@@ -253,10 +253,12 @@ double CpuEngine<T>::apply_constraints(std::vector<Vec3<T>>& u, std::int64_t ste
   core_.step_scalars(step, scalars_.data());
   const T* factor = scalars_.data() + core_.muscle_count();
   std::vector<double> partial(chunk_count(std::size_t(d.count)), 0.0);
+  // Without sliding a node's ops are a few multiply-adds: a parallel region would cost more.
+  const int threads = a_.slide_node.empty() ? 1 : threads_;
   auto run = [&](auto slide) {
     constexpr int kSlide = decltype(slide)::value ? 1 : 0;  // lists refreshed inline
     for_each_chunk<T>(
-        std::size_t(d.count), threads_, [&](std::size_t c, std::size_t begin, std::size_t end) {
+        std::size_t(d.count), threads, [&](std::size_t c, std::size_t begin, std::size_t end) {
           double w = 0;
           for (std::size_t k = begin; k < end; ++k) {
             const std::int32_t i = d.node[k];

@@ -167,15 +167,4 @@ SINEW_HD_INLINE void prescribe(T c, const Vec3<T>& value, const bool (&component
     if (components[d]) u[d] = c * value[d];
 }
 
-// Sliding node: keep the rest distance d from the surface (sliding.hpp, sliding_grid.hpp).
-// `triangle` in: warm start, out: the closest triangle. Returns the new displacement.
-template <typename T>
-SINEW_HD_INLINE Vec3<T> slide_node(const SurfaceView<T>& surface, const Vec3<T>& rest,
-                                   const Vec3<T>& u, T rest_distance, std::int32_t& triangle) {
-  const Vec3<T> x = rest + u;
-  const Vec3<T> p = closest_surface_point(surface, x, triangle);
-  const Vec3<T> xp = project_to_rest_distance(x, p, surface.normals[triangle], rest_distance);
-  return xp - rest;
-}
-
 }  // namespace sinew::simulator::physics
