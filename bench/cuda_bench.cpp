@@ -7,6 +7,8 @@
 // name contains NAME; profile: float, default assembly only, 3 launches after the warm-up, nothing
 // else, each launch's time printed (for ncu, and for how the step time moves through the scene);
 // launches: N timed launches; sliding-skin, sliding-refresh: those CudaOptions in every run.
+// --scene FILE ... [--precision float|double] [--out DIR]: the real scenes through the runner beside
+// the step alone on their model (scene_timing.hpp), instead of the models above.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -18,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "scene_timing.hpp"
 #include "sinew/simulator/benchmark_models.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/engine.hpp"
@@ -132,8 +135,16 @@ int main(int argc, char** argv) {
     const double v = k + 1 < argc ? std::strtod(argv[++k], &end) : 0;
     return end && *end == '\0' && v >= low ? v : -1.0;
   };
+  sinew::bench::SceneTimingOptions scenes;
+  scenes.device = "cuda";
   for (int k = 1; k < argc; ++k) {
     bool ok = true;
+    try {
+      if (sinew::bench::parse_scene_option(k, argc, argv, scenes)) continue;
+    } catch (const std::invalid_argument& e) {
+      std::printf("cuda_bench: %s\n", e.what());
+      return 2;
+    }
     if (std::strcmp(argv[k], "--quick") == 0) {
       quick = true;
     } else if (std::strcmp(argv[k], "--profile") == 0) {
@@ -155,7 +166,8 @@ int main(int argc, char** argv) {
     if (!ok) {
       std::printf(
           "usage: cuda_bench [--quick] [--only NAME] [--profile] [--launches N] "
-          "[--sliding-skin CELLS] [--sliding-refresh STEPS]\n");
+          "[--sliding-skin CELLS] [--sliding-refresh STEPS] | [--scene FILE ... "
+          "[--precision float|double] [--out DIR]]\n");
       return 2;
     }
   }
@@ -166,6 +178,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::printf("device: %s\n", cuda_device_name().c_str());
+  if (!scenes.scenes.empty()) return sinew::bench::run_scene_timing(scenes);
   const double copy_bw = measure_copy_bandwidth(std::size_t(1) << 30);
   std::printf("device-to-device copy (1 GiB, read + write): %.0f GB/s\n", copy_bw / 1e9);
   std::printf(

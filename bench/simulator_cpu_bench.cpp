@@ -2,6 +2,8 @@
 // of 1 mm, μ = 1 kPa, ν = 0.49), float and double, with and without muscles (the upper half of
 // the block) and sliding (the bottom face over a wavy skull-like surface, 7,200 triangles). Prints
 // one table; docs/performance.md records it. Usage: simulator_cpu_bench [--steps N] [--threads T]
+// [--scene FILE ... [--precision float|double] [--out DIR]] (scene_timing.hpp: real scenes through
+// the runner instead of the block).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,6 +16,7 @@
 
 #include <omp.h>
 
+#include "scene_timing.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/simulator/engine.hpp"
 #include "sliding_height_field.hpp"
@@ -57,11 +60,23 @@ formats::Model make_block(bool muscles, bool sliding) {
 
 int run(int argc, char** argv) {
   int steps = 40, threads = 0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--steps"))
-      steps = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--threads"))
-      threads = std::atoi(argv[i + 1]);
+  bench::SceneTimingOptions scenes;
+  for (int i = 1; i < argc; ++i) {
+    if (bench::parse_scene_option(i, argc, argv, scenes)) continue;
+    if (i + 1 < argc && !std::strcmp(argv[i], "--steps")) {
+      steps = std::atoi(argv[++i]);
+    } else if (i + 1 < argc && !std::strcmp(argv[i], "--threads")) {
+      threads = std::atoi(argv[++i]);
+    } else {
+      std::fprintf(stderr,
+                   "usage: simulator_cpu_bench [--steps N] [--threads T] [--scene FILE ... "
+                   "[--precision float|double] [--out DIR]]\n");
+      return 2;
+    }
+  }
+  if (!scenes.scenes.empty()) {  // the real scenes through the runner instead of the block
+    scenes.threads = threads;
+    return bench::run_scene_timing(scenes);
   }
   std::printf(
       "simulator_cpu_bench: 50 x 50 x 40 block, %d OpenMP threads, median of 5 runs of %d steps "

@@ -55,6 +55,10 @@ class Backend {
   // was found (finite, readable, restorable).
   virtual void step(std::int64_t n) = 0;
   virtual std::int64_t step_index() const = 0;
+  // How many steps a caller should ask of step() at a time when nothing falls due in between: the
+  // CPU 64 (progress and interrupts stay responsive), the CUDA backend several graph batches (it
+  // checks its queued steps once per call). Any count gives the same results.
+  virtual std::int64_t preferred_step_count() const { return 64; }
   virtual double time() const = 0;  // s, step_index() · dt()
   virtual double dt() const = 0;
 

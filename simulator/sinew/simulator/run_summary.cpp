@@ -43,6 +43,16 @@ std::string to_json(const RunSummary& s) {
   j["simulated_time_s"] = s.simulated_time;
   j["wall_time_s"] = s.wall_time_s;
   j["time_per_step_s"] = s.time_per_step_s;
+  j["setup_s"] = s.setup_s;
+  // Each stage's share of the loop, as seconds and per step (time_per_step_s split by stage).
+  auto stages = nlohmann::ordered_json::object();
+  auto per_step = nlohmann::ordered_json::object();
+  for (const auto& [name, seconds] : s.loop_stages) {
+    stages[name] = seconds;
+    per_step[name] = s.steps_this_run > 0 ? seconds / double(s.steps_this_run) : 0.0;
+  }
+  j["loop_stages_s"] = std::move(stages);
+  j["time_per_step_by_stage_s"] = std::move(per_step);
   j["frames"] = s.frames;
   auto energies = nlohmann::ordered_json::array();
   for (const auto& e : s.energies) {

@@ -4,6 +4,7 @@
 // docs/results-format.md lists every key.
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sinew/simulator/engine.hpp"
@@ -31,6 +32,11 @@ struct RunSummary {
   double simulated_time = 0;   // s, scene time reached
   double wall_time_s = 0;      // this process
   double time_per_step_s = 0;  // wall time of the step loop / steps_this_run
+  double setup_s = 0;          // wall time before the step loop: model, plan, engine, writers
+  // The step loop's wall time by stage (s, this process), in this order: "steps" (inside
+  // Backend::step), "frames" (fields, displacements and energies of each frame), "probes",
+  // "checkpoints", "summary" (this file), "other" (progress, the loop's own work).
+  std::vector<std::pair<std::string, double>> loop_stages;
   std::int64_t frames = 0;
   std::vector<Energies> energies;  // one per frame, simulated time
   std::vector<std::string> warnings;

@@ -52,6 +52,34 @@ std::int64_t event_step(std::int64_t k, double interval, double time_scaling, do
   return static_cast<std::int64_t>(std::ceil(x - 1e-9 * std::max(1.0, x)));
 }
 
+// Wall time of the step loop by stage (RunSummary::loop_stages): each timed call adds to its stage;
+// "other" is the rest of the loop.
+class StageClock {
+ public:
+  enum Stage { steps, frames, probes, checkpoints, summary, count };
+  template <typename F>
+  void time(Stage stage, F&& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    seconds_[stage] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  std::vector<std::pair<std::string, double>> stages(double loop_seconds) const {
+    static constexpr const char* kNames[count] = {"steps", "frames", "probes", "checkpoints",
+                                                  "summary"};
+    std::vector<std::pair<std::string, double>> out;
+    double timed = 0;
+    for (int k = 0; k < count; ++k) {
+      out.emplace_back(kNames[k], seconds_[k]);
+      timed += seconds_[k];
+    }
+    out.emplace_back("other", std::max(0.0, loop_seconds - timed));
+    return out;
+  }
+
+ private:
+  double seconds_[count] = {};
+};
+
 // Iterates the event steps of one output stream (frames or probe rows) past a given step.
 class Schedule {
  public:
@@ -319,6 +347,8 @@ RunResult run_scene(const RunOptions& options) {
   ProgressReporter progress("simulate", total, popt);
   const std::int64_t first_step = backend->step_index();
   const auto loop_start = std::chrono::steady_clock::now();
+  summary.setup_s = std::chrono::duration<double>(loop_start - wall_start).count();
+  StageClock clock;
   std::int64_t next_frame = frames.next_after(first_step);
   std::int64_t next_row = rows.next_after(first_step);
   const std::int64_t every = options.checkpoint_every;
@@ -328,26 +358,29 @@ RunResult run_scene(const RunOptions& options) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
     summary.time_per_step_s =
         summary.steps_this_run > 0 ? loop_s / double(summary.steps_this_run) : 0.0;
+    summary.loop_stages = clock.stages(loop_s);
   };
   try {
     while (backend->step_index() < total) {
       const std::int64_t n = backend->step_index();
-      std::int64_t target = std::min({total, next_frame, next_row, n + 64});
+      std::int64_t target =
+          std::min({total, next_frame, next_row, n + backend->preferred_step_count()});
       if (every > 0) target = std::min(target, (n / every + 1) * every);
       if (options.stop_at_step >= 0)
         target = std::min(target, std::max(options.stop_at_step, n + 1));
-      backend->step(target - n);
+      clock.time(StageClock::steps, [&] { backend->step(target - n); });
       const std::int64_t now = backend->step_index();
       if (now == next_frame) {
-        write_frame();
+        clock.time(StageClock::frames, write_frame);
         next_frame = frames.next_after(now);
-        write_summary();
+        clock.time(StageClock::summary, write_summary);
       }
       if (now == next_row) {
-        write_row();
+        clock.time(StageClock::probes, write_row);
         next_row = rows.next_after(now);
       }
-      if (every > 0 && now % every == 0 && now < total) write_ckpt();
+      if (every > 0 && now % every == 0 && now < total)
+        clock.time(StageClock::checkpoints, write_ckpt);
       progress.update(
           now, [&] { return fmt::format("t = {:.4g} / {:.4g} s", scene_time(), scene.duration); });
       const bool stop = options.stop_at_step >= 0 && now >= options.stop_at_step && now < total;

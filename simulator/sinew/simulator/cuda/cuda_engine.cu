@@ -180,7 +180,8 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
 
   scalars_per_slot_ = core_.step_scalar_count();
   scalars_.allocate(scalars_per_slot_ * std::size_t(batch_ + 1));
-  scalars_host_.allocate(scalars_per_slot_ * std::size_t(batch_ + 1));
+  ring_rows_ = std::size_t(kQueuedBatches + 1) * std::size_t(batch_ + 1);
+  scalars_host_.allocate(scalars_per_slot_ * ring_rows_);
   status_.allocate(1);
   status_.zero();
   status_host_.allocate(1);
@@ -229,7 +230,14 @@ CudaEngine<T>::~CudaEngine() {
 // step_scalars; a step of −1 gives the prescribed factors at t = 0, the initial constraints).
 template <typename T>
 void CudaEngine<T>::fill_scalars(std::int64_t first_step, int count, int slot0) {
-  T* h = scalars_host_.get() + scalars_per_slot_ * std::size_t(slot0);
+  // The copy runs in stream order: the host may not rewrite its staging rows before then, so each
+  // fill takes the next free rows of the ring, and a full ring first waits for the stream.
+  if (ring_next_ + std::size_t(count) > ring_rows_) {
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+    ring_next_ = 0;
+  }
+  T* h = scalars_host_.get() + scalars_per_slot_ * ring_next_;
+  ring_next_ += std::size_t(count);
   for (int k = 0; k < count; ++k)
     core_.step_scalars(first_step + k, h + scalars_per_slot_ * std::size_t(k));
   SINEW_CUDA_CHECK(cudaMemcpyAsync(scalars_.get() + scalars_per_slot_ * std::size_t(slot0), h,

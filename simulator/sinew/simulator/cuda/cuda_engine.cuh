@@ -58,6 +58,12 @@ class CudaEngine final : public Backend, public CudaTiming {
   Energies energies() override;
   ElementFields element_fields() override;
 
+  // step() queues this many graph batches' worth of steps between host synchronisations.
+  static constexpr int kQueuedBatches = 8;
+  std::int64_t preferred_step_count() const override {
+    return std::int64_t(kQueuedBatches) * batch_;
+  }
+
   std::vector<float> timed_graph_launches(int launches) override;
   int graph_steps() const override { return batch_; }
   double bytes_per_step() const override;
@@ -157,10 +163,13 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<Vec3<T>> buf_[3];
   DeviceArray<Vec3<T>> snap_u_, snap_up_;
   DeviceArray<double> element_energy_;
-  // per-step scalars: per slot [activation (M) | force factors (F) | prescribed factors (P)]
+  // per-step scalars: per slot [activation (M) | force factors (F) | prescribed factors (P)];
+  // device slots 0 .. batch_ − 1 for the graph, slot batch_ for a single launched step; staged on
+  // the host in a pinned ring of ring_rows_ rows (fill_scalars).
   std::size_t scalars_per_slot_ = 0;
   DeviceArray<T> scalars_;
   PinnedArray<T> scalars_host_;
+  std::size_t ring_rows_ = 0, ring_next_ = 0;
   // loads and constraints
   // loads and constraints: one program per constrained node (constraint_kernel)
   DeviceArray<std::int32_t> con_node_, con_offset_, con_op_;

@@ -320,25 +320,41 @@ void CudaEngine<T>::run_direct_step() {
   ++step_;
 }
 
+// Steps are queued without host synchronisation: graph batches where a batch fits at an aligned
+// step, single launched steps elsewhere (their blow-up tests on the device, as in the graph), up to
+// kQueuedBatches batches' worth, then one sync reads the status flags. A flag replays the queued
+// steps one by one from the snapshot with the host's checks at each step, so the failing step
+// throws with the state at the last good step (as a step-by-step run would); a device energy sum
+// that crossed the bound only by its summation order replays without failing. Results are the same
+// bits as synchronising after every step: the same kernels run in the same order on the same data.
 template <typename T>
 void CudaEngine<T>::step(std::int64_t n) {
   const std::int64_t end = step_ + n;
   while (step_ < end) {
-    if (step_ % align_ != 0 || end - step_ < batch_) {
-      snapshot();
-      run_direct_step();
-      continue;
-    }
+    const std::int64_t chunk_start = step_;
+    const std::int64_t chunk_end = std::min(end, step_ + std::int64_t(kQueuedBatches) * batch_);
     snapshot();
-    fill_scalars(step_, batch_, 0);
     SINEW_CUDA_CHECK(cudaMemsetAsync(status_.get(), 0, sizeof(StepStatus), stream_));
-    SINEW_CUDA_CHECK(cudaGraphLaunch(graph_, stream_));
+    bool graphs = false;
+    while (step_ < chunk_end) {
+      if (step_ % align_ == 0 && chunk_end - step_ >= batch_) {
+        fill_scalars(step_, batch_, 0);
+        SINEW_CUDA_CHECK(cudaGraphLaunch(graph_, stream_));
+        step_ += batch_;
+        graphs = true;
+      } else {
+        fill_scalars(step_, 1, int(batch_));
+        launch_step(step_, int(batch_), stream_, false, graph_blowup_ && step_ % interval_ == 0);
+        ++step_;
+      }
+    }
     SINEW_CUDA_CHECK(cudaMemcpyAsync(status_host_.get(), status_.get(), sizeof(StepStatus),
                                      cudaMemcpyDeviceToHost, stream_));
     SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+    ring_next_ = 0;  // every staged copy has run
     const StepStatus st = *status_host_.get();
-    if (st.slide_miss && !(st.bad_jacobian || st.bad_displacement || st.blowup) &&
-        ++slide_miss_batches_ >= 2) {
+    const bool failed = st.bad_jacobian || st.bad_displacement || st.blowup;
+    if (st.slide_miss && !failed && graphs && ++slide_miss_batches_ >= 2) {
       // Nodes outrun the lists refreshed ahead: from now on the graph refreshes them twice as
       // often, and once every step did not suffice (nodes moving more than s/2 per step), inline
       // (grid searches on the step's path again). Same results either way.
@@ -351,20 +367,19 @@ void CudaEngine<T>::step(std::int64_t n) {
       graph_ = nullptr;
       build_graph();
     }
-    if (st.bad_jacobian || st.bad_displacement || st.blowup || st.slide_miss) {
-      // Replay the batch step by step from the snapshot with the CPU's checks at each step: the
-      // failing step throws with the state at the last good step. (Direct steps refresh the
-      // sliding lists inline: a slide miss replays to the same results as a run without it.) (A device energy sum that
-      // crossed the bound only by its different summation order replays without failing.)
+    if (failed || st.slide_miss) {
+      // Direct steps refresh the sliding lists inline: a slide miss replays to the same results.
+      step_ = chunk_start;
       roll_back();
-      for (int k = 0; k < batch_; ++k) {
+      while (step_ < chunk_end) {
         snapshot();
         run_direct_step();
       }
       continue;
     }
-    step_ += batch_;
-    if (!graph_blowup_ && (step_ - batch_) / interval_ != (step_ - 1) / interval_)
+    // Without blow-up tests in the graph (a very long energy interval), the test at a sync point
+    // after a multiple of the interval.
+    if (!graph_blowup_ && (step_ - 1) / interval_ * interval_ >= chunk_start)
       check_blowup(external_work());
   }
 }
