@@ -24,6 +24,7 @@
 #include "sinew/simulator/engine.hpp"
 #include "sinew/simulator/probes.hpp"
 #include "sinew/simulator/results_writer.hpp"
+#include "sinew/simulator/run_estimate.hpp"
 
 namespace sinew::simulator {
 
@@ -233,6 +234,12 @@ RunResult run_scene(const RunOptions& options) {
     for (const auto& p : resolved.probes)
       text += fmt::format("  probe '{}': {}\n", p.name, p.description);
     for (const auto& w : summary.warnings) text += fmt::format("  warning: {}\n", w);
+    const bool element_fields =
+        std::any_of(resolved.fields.begin(), resolved.fields.end(), [](auto f) {
+          return f == OutputField::stress || f == OutputField::jacobian ||
+                 f == OutputField::energy_density;
+        });
+    text += describe(estimate_run(*backend, resolved, scene.duration, element_fields));
     print(text);
   }
   if (!options.run) return result;

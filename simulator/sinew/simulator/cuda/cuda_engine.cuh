@@ -96,6 +96,7 @@ class CudaEngine final : public Backend, public CudaTiming {
                    std::vector<std::pair<std::string, cudaEvent_t>>* marks = nullptr,
                    bool programmatic = false);
   std::vector<std::pair<std::string, float>> stage_times(int repeats) override;
+  cudaGraphExec_t capture_steps(int count);
   void build_graph();
   void run_direct_step();  // one step with its scalars, synchronised and checked
   void snapshot();
@@ -140,7 +141,8 @@ class CudaEngine final : public Backend, public CudaTiming {
   int sm_count_ = 132;
   // Graph steps as programmatic dependent launches (options.programmatic_launch on sm_90+).
   bool programmatic_ = false;
-  cudaGraphExec_t graph_ = nullptr;
+  cudaGraphExec_t graph_ = nullptr;        // batch_ steps
+  cudaGraphExec_t short_graph_ = nullptr;  // align_ steps (null when align_ = batch_)
 
   // elements
   DeviceArray<std::array<Index, 8>> elem_nodes_;

@@ -232,13 +232,14 @@ std::vector<std::pair<std::string, float>> CudaEngine<T>::stage_times(int repeat
   return out;
 }
 
+// The graph of a batch of `count` steps starting at a step ≡ 0 (mod align_), a multiple of 3 and
+// of the energy interval: its scalars in slots 0 .. count − 1.
 template <typename T>
-void CudaEngine<T>::build_graph() {
+cudaGraphExec_t CudaEngine<T>::capture_steps(int count) {
   cudaGraph_t g = nullptr;
   SINEW_CUDA_CHECK(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
   try {
-    // Phase 0: the batch starts at a step ≡ 0 (mod align_), a multiple of 3 and of the interval.
-    for (int k = 0; k < batch_; ++k)
+    for (int k = 0; k < count; ++k)
       launch_step(k, k, stream_, slide_ahead_, graph_blowup_ && k % interval_ == 0, nullptr,
                   programmatic_);
   } catch (...) {
@@ -247,9 +248,25 @@ void CudaEngine<T>::build_graph() {
     throw;
   }
   SINEW_CUDA_CHECK(cudaStreamEndCapture(stream_, &g));
-  const cudaError_t r = cudaGraphInstantiate(&graph_, g, 0);
+  cudaGraphExec_t exec = nullptr;
+  const cudaError_t r = cudaGraphInstantiate(&exec, g, 0);
   cudaGraphDestroy(g);
   SINEW_CUDA_CHECK(r);
+  return exec;
+}
+
+// The batch graph, and a short one of align_ steps for the aligned stretches shorter than a batch
+// between a run's outputs (probe rows every 90 steps would otherwise leave most steps to single
+// launches).
+template <typename T>
+void CudaEngine<T>::build_graph() {
+  for (cudaGraphExec_t* g : {&graph_, &short_graph_})
+    if (*g) {
+      cudaGraphExecDestroy(*g);
+      *g = nullptr;
+    }
+  graph_ = capture_steps(batch_);
+  if (align_ < batch_) short_graph_ = capture_steps(int(align_));
 }
 
 template <typename T>
@@ -342,6 +359,11 @@ void CudaEngine<T>::step(std::int64_t n) {
         SINEW_CUDA_CHECK(cudaGraphLaunch(graph_, stream_));
         step_ += batch_;
         graphs = true;
+      } else if (short_graph_ && step_ % align_ == 0 && chunk_end - step_ >= align_) {
+        fill_scalars(step_, int(align_), 0);
+        SINEW_CUDA_CHECK(cudaGraphLaunch(short_graph_, stream_));
+        step_ += align_;
+        graphs = true;
       } else {
         fill_scalars(step_, 1, int(batch_));
         launch_step(step_, int(batch_), stream_, false, graph_blowup_ && step_ % interval_ == 0);
@@ -363,8 +385,6 @@ void CudaEngine<T>::step(std::int64_t n) {
       else
         slide_ahead_ = false;
       slide_miss_batches_ = 0;
-      cudaGraphExecDestroy(graph_);
-      graph_ = nullptr;
       build_graph();
     }
     if (failed || st.slide_miss) {
