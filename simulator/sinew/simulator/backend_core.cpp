@@ -406,17 +406,17 @@ std::vector<double> BackendCore::velocities(const Vec3<T>* u, const Vec3<T>* up)
 
 template <typename T>
 std::array<double, 3> BackendCore::reaction(const EngineArrays<T>& a,
-                                            const std::vector<Index>& nodes_in, const Vec3<T>* f,
-                                            std::int64_t step) const {
+                                            const std::vector<Index>& nodes_in,
+                                            const Vec3<T>* set_forces, std::int64_t step) const {
   // External loads at t_n on these nodes (gravity, nodal forces): the support carries f − R.
   check_node_ids(nodes_in, "reaction");
   std::vector<char> in(nodes(), 0);
   for (auto n : nodes_in) in[std::size_t(n)] = 1;
   std::array<double, 3> r{0, 0, 0};
-  for (auto n : nodes_in) {
-    const auto i = std::size_t(n);
+  for (std::size_t k = 0; k < nodes_in.size(); ++k) {
+    const auto i = std::size_t(nodes_in[k]);
     for (int d = 0; d < 3; ++d) {
-      r[std::size_t(d)] += double(f[i][d]);
+      r[std::size_t(d)] += double(set_forces[k][d]);
       if (!a.gravity.empty()) r[std::size_t(d)] -= double(a.gravity[i][d]);
     }
   }

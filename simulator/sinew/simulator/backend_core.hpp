@@ -162,10 +162,11 @@ class BackendCore {
   Index worst_element(const EngineArrays<T>& a, const Vec3<T>* u, double& j) const;
   template <typename T>
   std::vector<double> velocities(const Vec3<T>* u, const Vec3<T>* up) const;  // N × 3, m/s
-  // Σ over `nodes` of (internal force f − gravity − nodal forces at t_n), N (Backend::reaction).
+  // Σ over `nodes` of (internal force − gravity − nodal forces at t_n), N (Backend::reaction);
+  // set_forces[k]: the internal force of nodes[k] (a node listed twice counts twice).
   template <typename T>
   std::array<double, 3> reaction(const EngineArrays<T>& a, const std::vector<Index>& nodes,
-                                 const Vec3<T>* f, std::int64_t step) const;
+                                 const Vec3<T>* set_forces, std::int64_t step) const;
   // Per-element output fields at u (Backend::element_fields), threads as kinetic_energy.
   template <typename T>
   ElementFields element_fields(const EngineArrays<T>& a, const Vec3<T>* u, std::int64_t step,

@@ -6,6 +6,9 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
+
+#include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/common/math.hpp"
 #include "sinew/simulator/backend_core.hpp"
@@ -68,7 +71,11 @@ class CpuEngine final : public Backend {
   }
   std::array<double, 3> reaction(const std::vector<Index>& nodes) override {
     ensure_forces(false);
-    return core_.reaction(a_, nodes, f_.data(), step_);
+    core_.check_node_ids(nodes, "reaction");
+    std::vector<Vec3<T>> set_forces;
+    set_forces.reserve(nodes.size());
+    for (auto n : nodes) set_forces.push_back(f_[std::size_t(n)]);
+    return core_.reaction(a_, nodes, set_forces.data(), step_);
   }
   Energies energies() override;
   ElementFields element_fields() override {
@@ -347,6 +354,19 @@ void CpuEngine<T>::restore(const State& s) {
 }
 
 }  // namespace
+
+std::vector<double> Backend::displacements(const std::vector<Index>& nodes) const {
+  const std::vector<double> u = displacements();
+  std::vector<double> out;
+  out.reserve(3 * nodes.size());
+  for (auto n : nodes) {
+    if (n < 0 || 3 * std::size_t(n) >= u.size())
+      throw ConfigError("", "nodes",
+                        fmt::format("node id {} out of range [0, {})", n, u.size() / 3));
+    out.insert(out.end(), u.begin() + 3 * std::ptrdiff_t(n), u.begin() + 3 * std::ptrdiff_t(n) + 3);
+  }
+  return out;
+}
 
 std::unique_ptr<Backend> make_cpu_backend(const formats::Model& model, const Setup& setup) {
   Plan plan = make_plan(model, setup);

@@ -68,16 +68,33 @@ ProbeWriter::~ProbeWriter() {
   for (auto* f : files_) std::fclose(f);
 }
 
+std::vector<Index> ProbeWriter::displacement_nodes() const {
+  std::vector<Index> nodes;
+  for (const auto& p : probes_)
+    if (p.kind != SceneProbe::Kind::reaction) nodes.push_back(p.nodes.front());
+  return nodes;
+}
+
 void ProbeWriter::record(double time, std::int64_t step, const std::vector<double>& u,
                          const Reaction& reaction) {
+  std::vector<double> probed;
+  for (auto n : displacement_nodes())
+    probed.insert(probed.end(), u.begin() + 3 * std::ptrdiff_t(n),
+                  u.begin() + 3 * std::ptrdiff_t(n) + 3);
+  record_probed(time, step, probed, reaction);
+}
+
+void ProbeWriter::record_probed(double time, std::int64_t step, const std::vector<double>& probed_u,
+                                const Reaction& reaction) {
+  std::size_t next = 0;  // the next displacement probe's entry in probed_u
   for (std::size_t i = 0; i < probes_.size(); ++i) {
     const auto& p = probes_[i];
     std::array<double, 3> v{};
     if (p.kind == SceneProbe::Kind::reaction) {
       v = reaction(p.nodes);
     } else {
-      const auto n = static_cast<std::size_t>(p.nodes.front());
-      v = {u[3 * n], u[3 * n + 1], u[3 * n + 2]};
+      v = {probed_u[3 * next], probed_u[3 * next + 1], probed_u[3 * next + 2]};
+      ++next;
     }
     const auto row =
         fmt::format("{:.17g},{},{:.17g},{:.17g},{:.17g}\n", time, step, v[0], v[1], v[2]);

@@ -35,6 +35,12 @@ class ProbeWriter {
   // One row per probe. u: N × 3 displacements (m). `reaction` is called only for reaction probes.
   void record(double time, std::int64_t step, const std::vector<double>& u,
               const Reaction& reaction);
+  // The same from the probed displacements alone: 3 per entry of displacement_nodes(), in order
+  // (Backend::displacements(nodes): a device copies only these).
+  void record_probed(double time, std::int64_t step, const std::vector<double>& probed_u,
+                     const Reaction& reaction);
+  // The node of each displacement probe, in probe order.
+  std::vector<Index> displacement_nodes() const;
 
   bool empty() const { return probes_.empty(); }
   // The CSV path of probe i.

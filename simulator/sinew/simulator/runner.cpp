@@ -328,8 +328,9 @@ RunResult run_scene(const RunOptions& options) {
   };
   const auto write_row = [&] {
     if (probes->empty()) return;
-    probes->record(scene_time(), backend->step_index(), backend->displacements(),
-                   [&](const std::vector<Index>& nodes) { return backend->reaction(nodes); });
+    probes->record_probed(
+        scene_time(), backend->step_index(), backend->displacements(probes->displacement_nodes()),
+        [&](const std::vector<Index>& nodes) { return backend->reaction(nodes); });
   };
   const auto write_ckpt = [&] {
     Checkpoint c;

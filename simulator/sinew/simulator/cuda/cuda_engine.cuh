@@ -52,6 +52,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   State state() const override;
   void restore(const State& s) override;
   std::vector<double> displacements() const override;
+  std::vector<double> displacements(const std::vector<Index>& nodes) const override;
   std::vector<double> velocities() const override;
   std::vector<double> internal_forces() override;
   std::array<double, 3> reaction(const std::vector<Index>& nodes) override;
@@ -101,8 +102,12 @@ class CudaEngine final : public Backend, public CudaTiming {
   void run_direct_step();  // one step with its scalars, synchronised and checked
   void snapshot();
   void roll_back();
-  std::vector<Vec3<T>> download_vec(const Vec3<T>* p) const;
-  std::vector<Vec3<T>> device_internal_forces();  // at u(n), downloaded
+  std::vector<Vec3<T>> download_vec(const Vec3<T>* p) const;  // N vectors
+  std::vector<Vec3<T>> download_vec_n(const Vec3<T>* p, std::size_t count) const;
+  void compute_internal_forces();  // f_ at u(n), on the device
+  // The vectors of the listed nodes (ids checked by the caller), gathered on the device and copied
+  // back alone (CopyNodesBody).
+  std::vector<Vec3<T>> pick(const Vec3<T>* from, const std::vector<Index>& nodes) const;
   void upload_vec(Vec3<T>* p, const std::vector<double>& flat);
   void compute_energy_terms(double& strain, double& hourglass);
   double kinetic_energy(const std::vector<Vec3<T>>& u, const std::vector<Vec3<T>>& up) const {
@@ -255,6 +260,9 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<StepStatus> status_;
   PinnedArray<StepStatus> status_host_;
   mutable PinnedArray<Vec3<T>> output_;
+  mutable std::vector<Index> picked_list_;  // the node list picked_ids_ holds
+  mutable DeviceArray<std::int32_t> picked_ids_;
+  mutable DeviceArray<Vec3<T>> picked_;
 };
 
 }  // namespace sinew::simulator::cuda

@@ -12,9 +12,15 @@ namespace sinew::simulator::cuda {
 
 template <typename T>
 std::vector<Vec3<T>> CudaEngine<T>::download_vec(const Vec3<T>* p) const {
-  std::vector<Vec3<T>> v(n_);
+  return download_vec_n(p, n_);
+}
+
+template <typename T>
+std::vector<Vec3<T>> CudaEngine<T>::download_vec_n(const Vec3<T>* p, std::size_t count) const {
+  std::vector<Vec3<T>> v(count);
   SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
-  SINEW_CUDA_CHECK(cudaMemcpy(v.data(), p, n_ * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
+  if (count)
+    SINEW_CUDA_CHECK(cudaMemcpy(v.data(), p, count * sizeof(Vec3<T>), cudaMemcpyDeviceToHost));
   return v;
 }
 
@@ -107,7 +113,27 @@ std::vector<double> CudaEngine<T>::velocities() const {
 }
 
 template <typename T>
-std::vector<Vec3<T>> CudaEngine<T>::device_internal_forces() {
+std::vector<double> CudaEngine<T>::displacements(const std::vector<Index>& nodes) const {
+  core_.check_node_ids(nodes, "nodes");
+  const auto u = pick(buffer(step_, 0), nodes);
+  return flatten(u.data(), u.size());
+}
+
+template <typename T>
+std::vector<Vec3<T>> CudaEngine<T>::pick(const Vec3<T>* from,
+                                         const std::vector<Index>& nodes) const {
+  if (nodes.empty()) return {};
+  if (nodes != picked_list_) {  // probes ask for the same nodes at every row: uploaded once
+    picked_ids_.upload(nodes);
+    picked_.allocate(nodes.size());
+    picked_list_ = nodes;
+  }
+  forall(nodes.size(), stream_, CopyNodesBody<T>{picked_ids_.get(), from, picked_.get()});
+  return download_vec_n(picked_.get(), nodes.size());
+}
+
+template <typename T>
+void CudaEngine<T>::compute_internal_forces() {
   if (!elem_force_.size()) elem_force_.allocate(e_ * 8);
   DeviceArray<T> a;
   upload_activation(a);
@@ -115,19 +141,20 @@ std::vector<Vec3<T>> CudaEngine<T>::device_internal_forces() {
   const NodeData<T> nodes{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
                           std::int32_t(n_)};
   forall(n_, stream_, GatherBody<T>{nodes, elem_force_.get(), f_.get()});
-  return download_vec(f_.get());
 }
 
 template <typename T>
 std::vector<double> CudaEngine<T>::internal_forces() {
-  const auto f = device_internal_forces();
+  compute_internal_forces();
+  const auto f = download_vec(f_.get());
   return flatten(f.data(), n_);
 }
 
 template <typename T>
 std::array<double, 3> CudaEngine<T>::reaction(const std::vector<Index>& nodes) {
   core_.check_node_ids(nodes, "reaction");  // before any device work
-  const auto f = device_internal_forces();
+  compute_internal_forces();
+  const auto f = pick(f_.get(), nodes);  // only the set's forces leave the device
   return core_.reaction(arrays_, nodes, f.data(), step_);
 }
 

@@ -74,4 +74,14 @@ struct GatherBody {
   }
 };
 
+// The generic body that copies the vectors of listed nodes: to[k] = from[nodes[k]] (probes and
+// reaction sets read only these from a device).
+template <typename T>
+struct CopyNodesBody {
+  const std::int32_t* nodes;
+  const Vec3<T>* from;
+  Vec3<T>* to;
+  SINEW_HD_INLINE void operator()(std::int32_t k) const { to[k] = from[nodes[k]]; }
+};
+
 }  // namespace sinew::simulator
