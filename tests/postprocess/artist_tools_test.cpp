@@ -86,7 +86,7 @@ TEST(ArtistTools, BlenderShowsResultsFrameKAtItsFrame) {
   // Slow motion 10× at 30 fps: results frame k at frame 3k (held until 3k + 2); the PC2 stays one
   // sample per frame. Frame 3k − 1 must still show k − 1 and 3k already k: no key a rounding error
   // late.
-  nlohmann::json slow = {{"fps", 30}, {"range", {0, 15}}};
+  nlohmann::json slow = {{"fps", 30}, {"range", {0, 15}}, {"color", true}};
   for (int k = 0; k < 6; ++k) {
     slow["gltf"].push_back({3 * k, k});
     if (k > 0) slow["gltf"].push_back({3 * k - 1, k - 1});

@@ -4,7 +4,8 @@
 #       OUT.glb REST.obj OUT.pc2 EXPECT.json
 # EXPECT.json: {"fps": F, "range": [first, last] (the glTF action's frame range),
 #   "positions": [[x, y, z] per results frame k] (one vertex, Blender world coordinates, m),
-#   "gltf": [[n, k], ...] and "pc2": [[n, k], ...] (Blender frame n must show results frame k)}.
+#   "gltf": [[n, k], ...] and "pc2": [[n, k], ...] (Blender frame n must show results frame k),
+#   "color": true when the glTF has COLOR_0 (optional)}.
 # Checks, for the glTF (imported with Smooth shading: Debian's Blender 3.4 importer fails with its
 # default shading, a numpy >= 1.24 bug) and for the OBJ + Mesh Cache modifier (default settings:
 # no axis mapping): the animation's frame range, and that Blender frame n_k shows results frame k
@@ -75,6 +76,9 @@ first, last = expect["range"]
 check(abs(lo - first) < 1e-3 and abs(hi - last) < 1e-3,
       f"glTF: action frame range {lo:g} .. {hi:g} (want {first} .. {last})")
 check_mapping(gltf_obj, "glTF", expect["gltf"])
+if expect.get("color"):
+    names = [c.name for c in gltf_obj.data.color_attributes]
+    check(names == ["Col"], f"glTF: COLOR_0 imported as the colour attribute Col (got {names})")
 gltf_obj.hide_viewport = True
 gltf_obj.hide_render = True
 

@@ -9,10 +9,11 @@
 //     n_k / fps: scene time × S, snapped to whole frames so no key falls between two frames.
 //
 // The default frame rate (fps = 0 in FrameTimingOptions) is 24 or 30 frames per second, whichever
-// makes the mode's factor closer to a whole number, 24 (Blender's default) on a tie:
+// makes the mode's factor x closer to a whole number n ≥ 1 relative to it (|x − n| / n), 24
+// (Blender's default) on a tie:
 //   one frame per frame: the slow-motion factor r / fps, r = 1 / Δt the output rate (Hz), Δt the
-//     median interval between results frames (s); e.g. 200 Hz → 24 fps (8.33× vs 6.67×, a tie),
-//     60 Hz → 30 fps (2×), 100 Hz → 24 fps (4.17×);
+//     median interval between results frames (s); e.g. 200 Hz → 24 fps (8.33× is 4.2 % off 8,
+//     6.67× 4.8 % off 7), 60 Hz → 30 fps (2×), 100 Hz → 24 fps (4.17×);
 //   time scale S: the animation frames per results frame Δt S fps; e.g. Δt S = 0.1 s → 30 fps
 //     (3 frames; 24 fps would give 2.4).
 //
