@@ -390,15 +390,11 @@ TEST(ExportGltf, GlbFollowsTheSpecificationRules) {
   write_glb((dir / "b.glb").string(), a, o);
   validate_glb(dir / "b.glb", a.vertex_count(), 4);
   // Morph target 3 + rest = frame 3 (turned to +Y up for up = z: (x, y, z) -> (x, z, -y)).
-  const auto bytes = slurp(dir / "b.glb");
-  const auto json_len = get<std::uint32_t>(bytes, 12);
-  const auto doc = nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_len);
+  const auto glb = read_glb(dir / "b.glb");
+  const auto& bytes = glb.bytes;
+  const auto& doc = glb.doc;
   const auto& prim = doc["meshes"][0]["primitives"][0];
-  auto data = [&](std::size_t accessor) {
-    const auto& acc = doc["accessors"][accessor];
-    const auto& v = doc["bufferViews"][acc["bufferView"].get<std::size_t>()];
-    return 20 + json_len + 8 + v.value("byteOffset", std::size_t{0});
-  };
+  auto data = [&](std::size_t accessor) { return glb.data(accessor); };
   const auto rest_at = data(prim["attributes"]["POSITION"]);
   const auto t3_at = data(prim["targets"][3]["POSITION"]);
   for (std::size_t i = 0; i < a.vertex_count(); i += 7) {

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -115,6 +116,27 @@ inline T get(const std::vector<char>& bytes, std::size_t offset) {
 inline std::vector<char> slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A .glb split into its JSON document and the byte offset of each accessor's data in `bytes`.
+struct Glb {
+  std::vector<char> bytes;
+  std::uint32_t json_len = 0;
+  nlohmann::json doc;
+
+  std::size_t data(std::size_t accessor) const {
+    const auto& acc = doc["accessors"][accessor];
+    const auto& v = doc["bufferViews"][acc["bufferView"].get<std::size_t>()];
+    return 20 + json_len + 8 + v.value("byteOffset", std::size_t{0});
+  }
+};
+
+inline Glb read_glb(const fs::path& p) {
+  Glb g;
+  g.bytes = slurp(p);
+  g.json_len = get<std::uint32_t>(g.bytes, 12);
+  g.doc = nlohmann::json::parse(g.bytes.begin() + 20, g.bytes.begin() + 20 + g.json_len);
+  return g;
 }
 
 }  // namespace sinew::postprocess::testing
