@@ -85,6 +85,12 @@ TEST(ExportTiming, TimeScaleSnapsToFramesAndRefusesTwoOnOne) {
     EXPECT_NE(std::string(e.what()).find("--time-scale"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("same frame"), std::string::npos) << e.what();
   }
+  // The default rate for 40 ms × 1 would be 24 fps, 0.96 frames apart (frames 12 and 13 both on
+  // 12): 30 keeps them apart.
+  const auto apart = frame_timing(uniform_times(20, 0.04), {.time_scale = 1});
+  EXPECT_EQ(apart.fps, 30.0);
+  EXPECT_EQ(apart.frame.back(), 23);                                       // 0.76 s × 30 = 22.8
+  EXPECT_THROW(frame_timing(t, {.time_scale = 0.1}), sinew::ConfigError);  // both collide
   EXPECT_THROW(frame_timing(t, {.fps = -1}), sinew::ConfigError);
   EXPECT_THROW(frame_timing(t, {.fps = 24, .time_scale = -1}), sinew::ConfigError);
   EXPECT_THROW(frame_timing(t, {.fps = 24, .time_scale = 1e300}), sinew::ConfigError);

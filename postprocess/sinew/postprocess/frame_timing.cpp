@@ -48,23 +48,19 @@ float key_time(std::int64_t frame, double fps) {
   return t;
 }
 
-FrameTiming frame_timing(const std::vector<double>& times, const FrameTimingOptions& o) {
-  if (!(o.time_scale >= 0) || !std::isfinite(o.time_scale)) {
-    throw ConfigError("", "--time-scale", fmt::format("must be positive, not {}", o.time_scale));
-  }
+namespace {
+
+// frame_timing at a given positive fps.
+FrameTiming timing_at(const std::vector<double>& times, double fps, double time_scale) {
   FrameTiming out;
-  out.fps = o.fps == 0.0 ? default_fps(times, o.time_scale) : o.fps;
-  if (!(out.fps > 0) || !std::isfinite(out.fps)) {
-    throw ConfigError("", "--fps", fmt::format("must be a positive frame rate, not {}", o.fps));
-  }
+  out.fps = fps;
   for (std::size_t k = 0; k < times.size(); ++k) {
     std::int64_t n = static_cast<std::int64_t>(k);
-    if (o.time_scale > 0) {
-      const double f = std::round((times[k] - times[0]) * o.time_scale * out.fps);
+    if (time_scale > 0) {
+      const double f = std::round((times[k] - times[0]) * time_scale * fps);
       if (!(f < 1e15)) {
-        throw ConfigError(
-            "", "--time-scale",
-            fmt::format("{} puts results frame {} past frame 10^15", o.time_scale, k));
+        throw ConfigError("", "--time-scale",
+                          fmt::format("{} puts results frame {} past frame 10^15", time_scale, k));
       }
       n = static_cast<std::int64_t>(f);
       if (k > 0 && n <= out.frame.back()) {
@@ -73,13 +69,40 @@ FrameTiming frame_timing(const std::vector<double>& times, const FrameTimingOpti
             fmt::format("{} at {} fps puts results frames {} (t = {:.9g} s) and {} (t = {:.9g} s) "
                         "on the same frame {}: raise --time-scale or --fps, or leave --time-scale "
                         "out (one results frame per frame)",
-                        o.time_scale, out.fps, k - 1, times[k - 1], k, times[k], n));
+                        time_scale, fps, k - 1, times[k - 1], k, times[k], n));
       }
     }
     out.frame.push_back(n);
-    out.time.push_back(key_time(n, out.fps));
+    out.time.push_back(key_time(n, fps));
   }
   return out;
+}
+
+}  // namespace
+
+FrameTiming frame_timing(const std::vector<double>& times, const FrameTimingOptions& o) {
+  if (!(o.time_scale >= 0) || !std::isfinite(o.time_scale)) {
+    throw ConfigError("", "--time-scale", fmt::format("must be positive, not {}", o.time_scale));
+  }
+  if (o.fps != 0.0) {
+    if (!(o.fps > 0) || !std::isfinite(o.fps)) {
+      throw ConfigError("", "--fps", fmt::format("must be a positive frame rate, not {}", o.fps));
+    }
+    return timing_at(times, o.fps, o.time_scale);
+  }
+  const double fps = default_fps(times, o.time_scale);
+  try {
+    return timing_at(times, fps, o.time_scale);
+  } catch (const ConfigError&) {
+    // The default's other rate when it gives every results frame its own frame (30 fps for
+    // 40 ms at 24 fps: 0.96 frames apart, 1.2 at 30).
+    if (o.time_scale == 0) throw;
+    try {
+      return timing_at(times, fps == 24.0 ? 30.0 : 24.0, o.time_scale);
+    } catch (const ConfigError&) {
+    }
+    throw;
+  }
 }
 
 }  // namespace sinew::postprocess

@@ -15,7 +15,8 @@
 //     median interval between results frames (s); e.g. 200 Hz → 24 fps (8.33× is 4.2 % off 8,
 //     6.67× 4.8 % off 7), 60 Hz → 30 fps (2×), 100 Hz → 24 fps (4.17×);
 //   time scale S: the animation frames per results frame Δt S fps; e.g. Δt S = 0.1 s → 30 fps
-//     (3 frames; 24 fps would give 2.4).
+//     (3 frames; 24 fps would give 2.4). When the rate so chosen puts two results frames on one
+//     frame and the other does not, the other (Δt S = 0.04 s: 30 fps, 1.2 frames apart, not 0.96).
 //
 // Key times are the largest float t with t × fps ≤ n (in double): Blender's importer puts a key at
 // frame t × fps and holds a STEP key from that frame on, so a key a rounding error after its frame
