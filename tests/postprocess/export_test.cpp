@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "export_test_support.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/postprocess/contact_sheet.hpp"
@@ -32,24 +33,9 @@
 namespace {
 
 using namespace sinew::postprocess;
+using namespace sinew::postprocess::testing;
 namespace fs = std::filesystem;
 namespace h5 = sinew::formats::hdf5;
-
-struct Mesh {
-  std::vector<float> positions;
-  std::vector<std::int32_t> triangles;
-};
-
-// Icosphere (test_meshes.hpp) as a float mesh.
-Mesh icosphere(int levels, double radius, std::array<double, 3> c = {0, 0, 0}) {
-  const auto soup = sinew::simulator::testing::make_icosphere(levels, radius, c);
-  Mesh m;
-  for (const auto& p : soup.vertices)
-    for (int k = 0; k < 3; ++k) m.positions.push_back(static_cast<float>(p[std::size_t(k)]));
-  for (const auto& tri : soup.triangles)
-    m.triangles.insert(m.triangles.end(), tri.begin(), tri.end());
-  return m;
-}
 
 // A cube of edge `a` centred at c (12 triangles, outward).
 Mesh cube(double a, std::array<double, 3> c) {
@@ -72,14 +58,6 @@ Mesh merge(const Mesh& a, const Mesh& b) {
   return m;
 }
 
-fs::path temp_dir(const std::string& name) {
-  const auto d =
-      fs::temp_directory_path() / ("sinew_export_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
 // Pixels differing from `background` by more than `threshold` in any channel.
 std::size_t covered(const Image& img, Rgb background, int threshold = 8) {
   std::size_t n = 0;
@@ -93,75 +71,6 @@ std::size_t covered(const Image& img, Rgb background, int threshold = 8) {
     }
   }
   return n;
-}
-
-// A surface animation: an icosphere stretched along y by (1 + 0.1 k / (F − 1)) at frame k.
-SurfaceAnimation stretching_sphere(std::size_t frames) {
-  const auto m = icosphere(2, 0.05);
-  SurfaceAnimation a;
-  a.name = "skin";
-  a.triangles = m.triangles;
-  for (std::size_t k = 0; k < frames; ++k) {
-    auto x = m.positions;
-    for (std::size_t i = 1; i < x.size(); i += 3) {
-      x[i] *= static_cast<float>(1.0 + 0.1 * static_cast<double>(k) / (frames - 1));
-    }
-    a.frames.push_back(x);
-    a.times.push_back(0.01 * static_cast<double>(k));
-  }
-  a.rest = a.frames.front();
-  return a;
-}
-
-// A results file as docs/results-format.md describes it, with the animation's surface under
-// /surfaces/<name> and a matching (one-element) volume mesh. `frames_extra` adds positions rows
-// beyond the complete frames (a frame being written).
-void write_results(const std::string& path, const SurfaceAnimation& a, bool frames_extra = false,
-                   const std::string& format = sinew::simulator::kResultsFormatName) {
-  auto f = h5::create_file(path);
-  h5::set_attribute(f, "format", format, path);
-  h5::set_attribute(f, "format_version", std::int64_t{sinew::simulator::kResultsFormatVersion},
-                    path);
-  h5::create_group(f, "/mesh", path);
-  h5::create_group(f, "/frames", path);
-  h5::create_group(f, "/surfaces", path);
-  h5::create_group(f, "/surfaces/" + a.name, path);
-  std::vector<double> rest(24, 0.0);
-  for (int i = 0; i < 8; ++i) {
-    rest[3 * i] = i & 1 ? 0.1 : -0.1;
-    rest[3 * i + 1] = i & 2 ? 0.1 : -0.1;
-    rest[3 * i + 2] = i & 4 ? 0.1 : -0.1;
-  }
-  h5::write(f, "/mesh/rest_positions", {8, 3}, rest.data(), path);
-  const std::vector<std::int32_t> conn = {0, 1, 3, 2, 4, 5, 7, 6}, mat = {0};
-  h5::write(f, "/mesh/connectivity", {1, 8}, conn.data(), path);
-  h5::write(f, "/mesh/material", {1}, mat.data(), path);
-  const hsize_t nf = a.frame_count(), nv = a.vertex_count();
-  std::vector<std::int64_t> steps(nf);
-  for (hsize_t k = 0; k < nf; ++k) steps[k] = static_cast<std::int64_t>(100 * k);
-  h5::write(f, "/frames/time", {nf}, a.times.data(), path);
-  h5::write(f, "/frames/step", {nf}, steps.data(), path);
-  std::vector<double> disp(nf * 24, 0.0);
-  h5::write(f, "/frames/displacement", {nf, 8, 3}, disp.data(), path);
-  std::vector<double> pos;
-  for (const auto& fr : a.frames) pos.insert(pos.end(), fr.begin(), fr.end());
-  if (frames_extra) pos.insert(pos.end(), a.frames.back().begin(), a.frames.back().end());
-  h5::write(f, "/surfaces/" + a.name + "/positions", {nf + (frames_extra ? 1 : 0), nv, 3},
-            pos.data(), path);
-  h5::write(f, "/surfaces/" + a.name + "/triangles", {a.triangle_count(), 3}, a.triangles.data(),
-            path);
-}
-
-template <typename T>
-T get(const std::vector<char>& bytes, std::size_t offset) {
-  T v;
-  std::memcpy(&v, bytes.data() + offset, sizeof v);
-  return v;
-}
-
-std::vector<char> slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -481,15 +390,11 @@ TEST(ExportGltf, GlbFollowsTheSpecificationRules) {
   write_glb((dir / "b.glb").string(), a, o);
   validate_glb(dir / "b.glb", a.vertex_count(), 4);
   // Morph target 3 + rest = frame 3 (turned to +Y up for up = z: (x, y, z) -> (x, z, -y)).
-  const auto bytes = slurp(dir / "b.glb");
-  const auto json_len = get<std::uint32_t>(bytes, 12);
-  const auto doc = nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_len);
+  const auto glb = read_glb(dir / "b.glb");
+  const auto& bytes = glb.bytes;
+  const auto& doc = glb.doc;
   const auto& prim = doc["meshes"][0]["primitives"][0];
-  auto data = [&](std::size_t accessor) {
-    const auto& acc = doc["accessors"][accessor];
-    const auto& v = doc["bufferViews"][acc["bufferView"].get<std::size_t>()];
-    return 20 + json_len + 8 + v.value("byteOffset", std::size_t{0});
-  };
+  auto data = [&](std::size_t accessor) { return glb.data(accessor); };
   const auto rest_at = data(prim["attributes"]["POSITION"]);
   const auto t3_at = data(prim["targets"][3]["POSITION"]);
   for (std::size_t i = 0; i < a.vertex_count(); i += 7) {
@@ -518,7 +423,7 @@ TEST(ExportPc2, HeaderFrameCountAndSize) {
   EXPECT_EQ(std::memcmp(bytes.data(), "POINTCACHE2\0", 12), 0);
   EXPECT_EQ(get<std::int32_t>(bytes, 12), 1);
   EXPECT_EQ(get<std::int32_t>(bytes, 16), static_cast<std::int32_t>(v));
-  EXPECT_EQ(get<float>(bytes, 20), 1.0f);
+  EXPECT_EQ(get<float>(bytes, 20), 0.0f);  // results frame 0 at frame 0, as in the glTF
   EXPECT_EQ(get<float>(bytes, 24), 1.0f);
   EXPECT_EQ(get<std::int32_t>(bytes, 28), 6);
   // Sample 5, vertex 10, y.

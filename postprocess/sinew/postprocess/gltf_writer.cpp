@@ -5,13 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <limits>
-#include <memory>
 #include <nlohmann/json.hpp>
 #include <vector>
 
 #include "sinew/common/error.hpp"
+#include "sinew/postprocess/output_file.hpp"
 
 namespace sinew::postprocess {
 namespace {
@@ -59,25 +58,29 @@ std::pair<nlohmann::json, nlohmann::json> bounds(const float* p, std::size_t cou
   return {nlohmann::json{lo[0], lo[1], lo[2]}, nlohmann::json{hi[0], hi[1], hi[2]}};
 }
 
-// Adds `count` × 3 floats as a VEC3 float accessor with its min and max (glTF requires them on
-// POSITION, morph targets included); returns the accessor's index.
-int vec3_accessor(Builder& b, const std::vector<float>& p, std::size_t count) {
-  const auto [lo, hi] = bounds(p.data(), count);
+// Adds `count` × 3 floats as a VEC3 float accessor, with its min and max when `with_bounds` (glTF
+// requires them on POSITION, morph targets included); returns the accessor's index.
+int vec3_accessor(Builder& b, const std::vector<float>& p, std::size_t count,
+                  bool with_bounds = true) {
   const int view = b.view(p.data(), p.size() * 4, kArrayBuffer);
-  return b.accessor({{"bufferView", view},
-                     {"byteOffset", 0},
-                     {"componentType", kFloat},
-                     {"count", count},
-                     {"type", "VEC3"},
-                     {"min", lo},
-                     {"max", hi}});
+  nlohmann::json acc = {{"bufferView", view},
+                        {"byteOffset", 0},
+                        {"componentType", kFloat},
+                        {"count", count},
+                        {"type", "VEC3"}};
+  if (with_bounds) {
+    const auto [lo, hi] = bounds(p.data(), count);
+    acc["min"] = lo;
+    acc["max"] = hi;
+  }
+  return b.accessor(std::move(acc));
 }
 
 }  // namespace
 
-void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOptions& o) {
-  if (!(o.time_scale > 0)) throw ConfigError("", "time_scale", "must be positive");
+FrameTiming write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOptions& o) {
   validate(a);
+  const auto timing = frame_timing(a.times, {.fps = o.fps, .time_scale = o.time_scale});
   const std::size_t nv = a.vertex_count(), nf = a.frame_count();
   auto turn = [&](std::vector<float> p) {
     if (o.up == UpAxis::z) {
@@ -90,6 +93,9 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
     return p;
   };
   const auto rest = turn(a.rest);
+  // Normals of the turned poses: turning is a rotation, so normals of turned positions are the
+  // turned normals. Up (+Y) is the fallback for a vertex of no proper triangle.
+  const auto rest_normals = smooth_normals(rest, a.triangles, {0.0f, 1.0f, 0.0f});
 
   Builder b;
   std::vector<std::uint32_t> indices(a.triangles.begin(), a.triangles.end());
@@ -99,25 +105,41 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
                                   {"componentType", kUnsignedInt},
                                   {"count", indices.size()},
                                   {"type", "SCALAR"}});
-  const int pos_acc = vec3_accessor(b, rest, nv);
+  nlohmann::json attributes = {{"POSITION", vec3_accessor(b, rest, nv)},
+                               {"NORMAL", vec3_accessor(b, rest_normals, nv, false)}};
+  nlohmann::json material = {{"name", "skin"},
+                             {"pbrMetallicRoughness",
+                              {{"baseColorFactor", {0.84, 0.69, 0.59, 1.0}},
+                               {"metallicFactor", 0.0},
+                               {"roughnessFactor", 0.6}}}};
+  if (o.color == VertexScalar::displacement) {
+    const auto peak = peak_displacement(a);
+    const float max = *std::max_element(peak.begin(), peak.end());
+    attributes["COLOR_0"] = vec3_accessor(b, viridis_colors(peak, max), nv, false);
+    const int view = b.view(peak.data(), peak.size() * 4, kArrayBuffer);
+    attributes["_DISPLACEMENT"] = b.accessor({{"bufferView", view},
+                                              {"byteOffset", 0},
+                                              {"componentType", kFloat},
+                                              {"count", nv},
+                                              {"type", "SCALAR"}});
+    material["pbrMetallicRoughness"]["baseColorFactor"] = {1.0, 1.0, 1.0, 1.0};
+    material["extras"] = {{"color", "peak displacement, viridis"}, {"min_m", 0.0}, {"max_m", max}};
+  }
   nlohmann::json targets = nlohmann::json::array(), names = nlohmann::json::array();
   for (std::size_t k = 0; k < nf; ++k) {
     auto delta = turn(a.frames[k]);
-    for (std::size_t i = 0; i < delta.size(); ++i) delta[i] -= rest[i];
-    targets.push_back({{"POSITION", vec3_accessor(b, delta, nv)}});
+    auto normal = smooth_normals(delta, a.triangles, {0.0f, 1.0f, 0.0f});
+    for (std::size_t i = 0; i < delta.size(); ++i) {
+      delta[i] -= rest[i];
+      normal[i] -= rest_normals[i];
+    }
+    targets.push_back({{"POSITION", vec3_accessor(b, delta, nv)},
+                       {"NORMAL", vec3_accessor(b, normal, nv, false)}});
     names.push_back(fmt::format("frame_{:04}", k));
   }
-  std::vector<float> times(nf), weights(nf * nf, 0.0f);
-  for (std::size_t k = 0; k < nf; ++k) {
-    times[k] = static_cast<float>((a.times[k] - a.times[0]) * o.time_scale);
-    weights[k * nf + k] = 1.0f;
-  }
-  // Float rounding must not make two key times equal (the input must increase strictly).
-  for (std::size_t k = 1; k < nf; ++k) {
-    if (!(times[k] > times[k - 1])) {
-      times[k] = std::nextafter(times[k - 1], std::numeric_limits<float>::max());
-    }
-  }
+  std::vector<float> weights(nf * nf, 0.0f);
+  for (std::size_t k = 0; k < nf; ++k) weights[k * nf + k] = 1.0f;
+  const auto& times = timing.time;
   const int time_view = b.view(times.data(), times.size() * 4, 0);
   const int time_acc = b.accessor({{"bufferView", time_view},
                                    {"byteOffset", 0},
@@ -134,8 +156,9 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
                                 {"type", "SCALAR"}});
   while (b.bin.size() % 4 != 0) b.bin.push_back(0);
 
-  nlohmann::json primitive = {{"attributes", {{"POSITION", pos_acc}}},
+  nlohmann::json primitive = {{"attributes", attributes},
                               {"indices", idx_acc},
+                              {"material", 0},
                               {"mode", 4},
                               {"targets", targets}};
   nlohmann::json doc = {
@@ -143,6 +166,7 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
       {"scene", 0},
       {"scenes", {{{"nodes", {0}}}}},
       {"nodes", {{{"mesh", 0}, {"name", a.name}}}},
+      {"materials", {material}},
       {"meshes",
        {{{"name", a.name},
          {"primitives", {primitive}},
@@ -154,7 +178,8 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
           {{{"input", time_acc},
             {"output", w_acc},
             {"interpolation", o.linear ? "LINEAR" : "STEP"}}}},
-         {"channels", {{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}}}}}},
+         {"channels", {{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}}},
+         {"extras", {{"fps", timing.fps}, {"frames", timing.frame}}}}}},
       {"accessors", b.accessors},
       {"bufferViews", b.views},
       {"buffers", {{{"byteLength", b.bin.size()}}}},
@@ -167,20 +192,19 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
     throw IoError(path, "",
                   fmt::format("the animation needs {} bytes, over glTF's 4 GiB limit", total));
   }
-  struct FileCloser {
-    void operator()(std::FILE* f) const { std::fclose(f); }
-  };
-  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "wb"));
-  if (!f) throw IoError(path, "", "cannot open for writing");
+  std::string bytes;
+  bytes.reserve(total);
+  auto put = [&](const void* p, std::size_t n) { bytes.append(static_cast<const char*>(p), n); };
   const std::uint32_t header[3] = {kMagic, 2, static_cast<std::uint32_t>(total)};
   const std::uint32_t json_head[2] = {static_cast<std::uint32_t>(json.size()), kJsonChunk};
   const std::uint32_t bin_head[2] = {static_cast<std::uint32_t>(b.bin.size()), kBinChunk};
-  bool ok = std::fwrite(header, 4, 3, f.get()) == 3 && std::fwrite(json_head, 4, 2, f.get()) == 2 &&
-            std::fwrite(json.data(), 1, json.size(), f.get()) == json.size() &&
-            std::fwrite(bin_head, 4, 2, f.get()) == 2 &&
-            std::fwrite(b.bin.data(), 1, b.bin.size(), f.get()) == b.bin.size();
-  ok = ok && std::fflush(f.get()) == 0;
-  if (!ok) throw IoError(path, "", "cannot write (disk full?)");
+  put(header, sizeof header);
+  put(json_head, sizeof json_head);
+  put(json.data(), json.size());
+  put(bin_head, sizeof bin_head);
+  put(b.bin.data(), b.bin.size());
+  write_file_atomically(path, bytes);
+  return timing;
 }
 
 }  // namespace sinew::postprocess

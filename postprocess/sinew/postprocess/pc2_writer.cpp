@@ -3,12 +3,12 @@
 #include <fmt/format.h>
 
 #include <bit>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <memory>
 
 #include "sinew/common/error.hpp"
+#include "sinew/postprocess/output_file.hpp"
+#include "sinew/postprocess/rasterizer.hpp"
 
 namespace sinew::postprocess {
 namespace {
@@ -16,33 +16,9 @@ namespace {
 static_assert(std::endian::native == std::endian::little,
               "PC2 and glTF are little endian; this writer stores native floats");
 
-struct FileCloser {
-  void operator()(std::FILE* f) const { std::fclose(f); }
-};
-using File = std::unique_ptr<std::FILE, FileCloser>;
-
-File open_write(const std::string& path) {
-  File f(std::fopen(path.c_str(), "wb"));
-  if (!f) throw IoError(path, "", "cannot open for writing");
-  return f;
-}
-
-void put(std::FILE* f, const void* data, std::size_t bytes, const std::string& path) {
-  if (bytes > 0 && std::fwrite(data, 1, bytes, f) != bytes) {
-    throw IoError(path, "", "cannot write (disk full?)");
-  }
-}
-
-void finish(File& f, const std::string& path) {
-  if (std::fflush(f.get()) != 0 || std::ferror(f.get())) {
-    throw IoError(path, "", "cannot write (disk full?)");
-  }
-}
-
 }  // namespace
 
 void write_pc2(const std::string& path, const SurfaceAnimation& a, const Pc2Options& o) {
-  auto f = open_write(path);
   char header[kPc2HeaderBytes] = {};
   std::memcpy(header, "POINTCACHE2", 12);  // with its terminating NUL
   const std::int32_t version = 1, points = static_cast<std::int32_t>(a.vertex_count()),
@@ -52,43 +28,70 @@ void write_pc2(const std::string& path, const SurfaceAnimation& a, const Pc2Opti
   std::memcpy(header + 20, &o.start_frame, 4);
   std::memcpy(header + 24, &o.sample_rate, 4);
   std::memcpy(header + 28, &samples, 4);
-  put(f.get(), header, sizeof header, path);
-  for (const auto& frame : a.frames) put(f.get(), frame.data(), frame.size() * sizeof(float), path);
-  finish(f, path);
+  std::string bytes(header, sizeof header);
+  bytes.reserve(sizeof header + a.frame_count() * a.rest.size() * sizeof(float));
+  for (const auto& frame : a.frames) {
+    bytes.append(reinterpret_cast<const char*>(frame.data()), frame.size() * sizeof(float));
+  }
+  write_file_atomically(path, bytes);
 }
 
 void write_obj(const std::string& path, const std::vector<float>& positions,
-               const std::vector<std::int32_t>& triangles, const std::string& comment) {
-  auto f = open_write(path);
+               const std::vector<std::int32_t>& triangles, const std::string& comment,
+               const ObjAttributes& attributes) {
+  const auto& n = attributes.normals;
+  const auto& c = attributes.colors;
+  if (!n.empty() && n.size() != positions.size()) {
+    throw ConfigError(path, "normals", "expected one normal per vertex");
+  }
+  if (!c.empty() && c.size() != positions.size()) {
+    throw ConfigError(path, "colors", "expected one colour per vertex");
+  }
   std::string text;
-  text.reserve(positions.size() * 14 + triangles.size() * 8 + 64);
+  text.reserve(positions.size() * (14 + (n.empty() ? 0 : 14) + (c.empty() ? 0 : 8)) +
+               triangles.size() * (n.empty() ? 8 : 14) + 64);
   if (!comment.empty()) text += "# " + comment + "\n";
   for (std::size_t i = 0; i + 2 < positions.size(); i += 3) {
-    text +=
-        fmt::format("v {:.9g} {:.9g} {:.9g}\n", positions[i], positions[i + 1], positions[i + 2]);
+    text += fmt::format("v {:.9g} {:.9g} {:.9g}", positions[i], positions[i + 1], positions[i + 2]);
+    if (!c.empty()) text += fmt::format(" {:.4f} {:.4f} {:.4f}", c[i], c[i + 1], c[i + 2]);
+    text += '\n';
+  }
+  for (std::size_t i = 0; i + 2 < n.size(); i += 3) {
+    text += fmt::format("vn {:.6f} {:.6f} {:.6f}\n", n[i], n[i + 1], n[i + 2]);
   }
   for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
-    text +=
-        fmt::format("f {} {} {}\n", triangles[t] + 1, triangles[t + 1] + 1, triangles[t + 2] + 1);
+    const auto a = triangles[t] + 1, b = triangles[t + 1] + 1, d = triangles[t + 2] + 1;
+    // Normals share the vertex numbering, so each corner names the same index twice.
+    text += n.empty() ? fmt::format("f {} {} {}\n", a, b, d)
+                      : fmt::format("f {0}//{0} {1}//{1} {2}//{2}\n", a, b, d);
   }
-  put(f.get(), text.data(), text.size(), path);
-  finish(f, path);
+  write_file_atomically(path, text);
 }
 
 std::vector<std::string> write_obj_sequence(const std::string& directory, const SurfaceAnimation& a,
-                                            const std::string& prefix) {
+                                            const std::string& prefix, VertexScalar color) {
   std::error_code ec;
   std::filesystem::create_directories(directory, ec);
   if (ec) throw IoError(directory, "", "cannot create the directory: " + ec.message());
   const int digits =
       a.frame_count() > 10000 ? static_cast<int>(std::to_string(a.frame_count() - 1).size()) : 4;
+  const float max = color == VertexScalar::displacement ? max_displacement(a) : 0.0f;
   std::vector<std::string> paths;
   for (std::size_t k = 0; k < a.frame_count(); ++k) {
     const auto path =
         (std::filesystem::path(directory) / fmt::format("{}_{:0{}}.obj", prefix, k, digits))
             .string();
+    ObjAttributes attributes{.normals = smooth_normals(a.frames[k], a.triangles), .colors = {}};
+    if (color == VertexScalar::displacement) {
+      // OBJ viewers take vertex colours as sRGB: the colour map's own bytes.
+      for (float d : displacement_magnitude(a, k)) {
+        const Rgb rgb = map_color(ColorMap::viridis, max > 0 ? d / max : 0.0);
+        for (auto ch : {rgb.r, rgb.g, rgb.b}) attributes.colors.push_back(ch / 255.0f);
+      }
+    }
     write_obj(path, a.frames[k], a.triangles,
-              fmt::format("sinew surface {} frame {} t = {:.9g} s", a.name, k, a.times[k]));
+              fmt::format("sinew surface {} frame {} t = {:.9g} s", a.name, k, a.times[k]),
+              attributes);
     paths.push_back(path);
   }
   return paths;

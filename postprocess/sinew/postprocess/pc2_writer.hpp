@@ -12,35 +12,53 @@
 //   then F × V × 3 float32: the points' x, y, z per sample, m.
 // The points are the surface's vertices in their stored order, so the mesh the cache is applied
 // to must have exactly that vertex order: the rest-pose OBJ written by write_obj.
+//
+// Timing: sample k is results frame k. Blender's Mesh Cache modifier (time mode "Frame", its
+// default) shows sample (scene frame − the modifier's Frame Start, default 0) and ignores the
+// header's start frame and rate, so results frame k shows at Blender frame k, as in the glTF
+// export by default; the header says the same (start frame 0, one sample per frame) for readers
+// that use it. Every file is written to a temporary name and renamed (output_file.hpp).
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "sinew/postprocess/results_reader.hpp"
+#include "sinew/postprocess/vertex_attributes.hpp"
 
 namespace sinew::postprocess {
 
 inline constexpr std::size_t kPc2HeaderBytes = 32;
 
 struct Pc2Options {
-  float start_frame = 1.0f;  // Blender's default first frame
-  float sample_rate = 1.0f;  // one results frame per Blender frame
+  float start_frame = 0.0f;  // the frame of results frame 0, as in the glTF export
+  float sample_rate = 1.0f;  // frames between samples: one results frame per frame
 };
 
 // Writes every frame of `animation`; throws IoError when the file cannot be written.
 void write_pc2(const std::string& path, const SurfaceAnimation& animation,
                const Pc2Options& options = {});
 
-// A Wavefront OBJ of one pose: "v x y z" per vertex (m, 9 significant digits) then
-// "f a b c" per triangle (1-based), no normals, no texture coordinates: the vertex order is the
-// surface's. `comment` goes into a leading "# " line when not empty.
+// Optional per-vertex data of an OBJ, each empty or V × 3 floats.
+struct ObjAttributes {
+  std::vector<float> normals;  // unit normals: "vn" lines, faces "f a//a b//b c//c"
+  std::vector<float> colors;   // RGB in [0, 1]: "v x y z r g b" (read by Blender 3.4's importer)
+};
+
+// A Wavefront OBJ of one pose: "v x y z" per vertex (m, 9 significant digits), the attributes'
+// lines, then "f a b c" per triangle (1-based; "a//a" with normals); no texture coordinates: the
+// vertex order is the surface's. `comment` goes into a leading "# " line when not empty. Throws
+// ConfigError when an attribute's size is not the positions', IoError when it cannot be written.
 void write_obj(const std::string& path, const std::vector<float>& positions,
-               const std::vector<std::int32_t>& triangles, const std::string& comment = "");
+               const std::vector<std::int32_t>& triangles, const std::string& comment = "",
+               const ObjAttributes& attributes = {});
 
 // One OBJ per frame into `directory` (created when missing): <prefix>_0000.obj, ... (4 digits,
-// more when there are more than 10000 frames). Returns the paths written.
+// more when there are more than 10000 frames), with each frame's smooth normals
+// (vertex_attributes.hpp) and, with color = displacement, the frame's |u| through viridis over
+// [0, the animation's max |u|] as vertex colours (sRGB). Returns the paths written.
 std::vector<std::string> write_obj_sequence(const std::string& directory,
                                             const SurfaceAnimation& animation,
-                                            const std::string& prefix = "frame");
+                                            const std::string& prefix = "frame",
+                                            VertexScalar color = VertexScalar::none);
 
 }  // namespace sinew::postprocess
