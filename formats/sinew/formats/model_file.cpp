@@ -1,8 +1,5 @@
 #include "sinew/formats/model_file.hpp"
 
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -11,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/validate.hpp"
@@ -494,22 +492,11 @@ Model read_all(Reader& r) {
 
 void write_model(const Model& model, const std::string& path) {
   validate_model(model, path);
-  const std::string tmp = path + ".tmp-" + std::to_string(static_cast<long>(getpid()));
-  try {
+  write_atomically(path, [&](const std::string& tmp) {
     Writer w(tmp, path);
     write_all(w, model);
     w.close();
-  } catch (...) {
-    std::remove(tmp.c_str());
-    throw;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(tmp.c_str());
-    throw IoError(
-        path, "",
-        std::string("cannot rename the temporary file into place: ") + std::strerror(err));
-  }
+  });
 }
 
 Model read_model(const std::string& path) {
