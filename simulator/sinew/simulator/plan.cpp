@@ -271,9 +271,20 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
         "(≈ 0.85 h/c at ν = 0.49, less with hourglass stiffness or compression); the run stops "
         "with a clear message if it does",
         plan.dt / dt_crit, kSafeCourantShare));
-  plan.steps = setup.duration > 0
-                   ? static_cast<std::int64_t>(std::ceil(setup.duration / plan.dt - 1e-9))
-                   : 0;
+  // Counted in double first: a huge duration (or time_scaling) must be refused, not wrap around
+  // to a negative int64 and "complete" after 0 steps. 2^53 is where step indices stop being
+  // exact in the double time arithmetic; run_limits.hpp sets the (overridable) sane limit.
+  const double steps = setup.duration > 0 ? std::ceil(setup.duration / plan.dt - 1e-9) : 0.0;
+  if (!(steps <= 0x1p53)) {
+    bad(setup.time_scaling != 1 ? "time_scaling" : "duration",
+        fmt::format(
+            "duration {:.6g} s{} at Δt = {:.3g} s is {:.3g} steps, more than a run can count",
+            setup.duration / setup.time_scaling,
+            setup.time_scaling != 1 ? fmt::format(" × time_scaling {:.6g}", setup.time_scaling)
+                                    : std::string(),
+            plan.dt, steps));
+  }
+  plan.steps = static_cast<std::int64_t>(steps);
   if (setup.mass_scaling != 1)
     plan.warnings.push_back(fmt::format(
         "mass scaling × {}: densities scaled, Δt × {:.4g}; inertia is wrong by this factor",
