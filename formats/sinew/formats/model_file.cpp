@@ -10,6 +10,7 @@
 
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/formats/file_kind.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/validate.hpp"
 
@@ -224,6 +225,10 @@ class Reader {
         fail(std::string("/") + name, "missing root attribute (not a sinew model file?)");
       }
     };
+    if (hdf5::has_attribute(file_, "format") && !has_format(file_, path_, kModelFormatName)) {
+      throw wrong_kind(file_, path_, "a sinew model file",
+                       "give a model written by sinew-voxelize or sinew-generate");
+    }
     require("format");
     const std::string format = hdf5::string_attribute(file_, "format", path_);
     if (format != kModelFormatName) {

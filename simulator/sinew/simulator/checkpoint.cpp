@@ -6,6 +6,7 @@
 
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/formats/file_kind.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/sha256.hpp"
 
@@ -52,9 +53,10 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
 
 Checkpoint read_checkpoint(const std::string& path) {
   auto f = h5::open_file(path, false);
-  if (!h5::has_attribute(f, "format") ||
-      h5::string_attribute(f, "format", path) != kCheckpointFormatName) {
-    throw FormatError(path, "format", "not a sinew checkpoint file");
+  if (!formats::has_format(f, path, kCheckpointFormatName)) {
+    throw formats::wrong_kind(
+        f, path, "a sinew checkpoint",
+        "--restart takes the checkpoint.h5 of an interrupted run's output folder");
   }
   const auto version = h5::int_attribute(f, "format_version", path);
   if (version != kCheckpointFormatVersion) {

@@ -135,6 +135,12 @@ RunResult run_scene(const RunOptions& options) {
   const auto scene_text = read_text(options.scene_path);
   const auto scene = parse_scene_text(scene_text, options.scene_path,
                                       fs::path(options.scene_path).parent_path().string());
+  if (!fs::exists(scene.model_path)) {
+    throw ConfigError(options.scene_path, "model",
+                      fmt::format("the model file '{}' does not exist (model: {}, relative to the "
+                                  "scene's folder)",
+                                  scene.model_path, scene.model));
+  }
   const formats::Model model = formats::read_model(scene.model_path);
   ResolveOptions ro;
   ro.precision = options.precision;
