@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <utility>
 
 #include "sinew/common/error.hpp"
 
@@ -15,20 +16,26 @@ std::string temporary_name(const std::string& path) {
   return path + ".tmp-" + std::to_string(static_cast<long>(::getpid()));
 }
 
+TemporaryFile::TemporaryFile(std::string path)
+    : final_(std::move(path)), tmp_(temporary_name(final_)) {}
+
+TemporaryFile::~TemporaryFile() {
+  if (!committed_) std::remove(tmp_.c_str());
+}
+
+void TemporaryFile::commit() {
+  if (std::rename(tmp_.c_str(), final_.c_str()) != 0) {
+    throw IoError(final_, "",
+                  "cannot rename the temporary file into place: " + write_failure(errno));
+  }
+  committed_ = true;
+}
+
 void write_atomically(const std::string& path,
                       const std::function<void(const std::string&)>& write) {
-  const std::string tmp = temporary_name(path);
-  try {
-    write(tmp);
-  } catch (...) {
-    std::remove(tmp.c_str());
-    throw;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(tmp.c_str());
-    throw IoError(path, "", "cannot rename the temporary file into place: " + write_failure(err));
-  }
+  TemporaryFile out(path);
+  write(out.path());
+  out.commit();
 }
 
 void write_text_atomically(const std::string& path, const std::string& text) {

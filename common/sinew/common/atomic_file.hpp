@@ -27,6 +27,25 @@ void write_atomically(const std::string& path,
 // write_failure()'s reason) when it cannot be written.
 void write_text_atomically(const std::string& path, const std::string& text);
 
+// The same as a guard, for writers that open and close the file themselves:
+//   TemporaryFile out(path);  // write to out.path(), "<path>.tmp-<pid>"
+//   ...
+//   out.commit();             // renames it onto path (IoError naming path when that fails)
+// Without commit() (an exception, an early return) the destructor removes the temporary.
+class TemporaryFile {
+ public:
+  explicit TemporaryFile(std::string path);
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  ~TemporaryFile();
+  const std::string& path() const { return tmp_; }
+  void commit();
+
+ private:
+  std::string final_, tmp_;
+  bool committed_ = false;
+};
+
 // The reason a write failed, from errno: "no space left on the device (disk full)" for ENOSPC
 // and EDQUOT, else strerror(err).
 std::string write_failure(int err);

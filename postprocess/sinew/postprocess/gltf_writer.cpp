@@ -169,23 +169,22 @@ void write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOpt
     throw IoError(path, "",
                   fmt::format("the animation needs {} bytes, over glTF's 4 GiB limit", total));
   }
-  write_atomically(path, [&](const std::string& tmp) {
-    struct FileCloser {
-      void operator()(std::FILE* f) const { std::fclose(f); }
-    };
-    std::unique_ptr<std::FILE, FileCloser> f(std::fopen(tmp.c_str(), "wb"));
-    if (!f) throw IoError(path, "", "cannot open for writing: " + write_failure(errno));
-    const std::uint32_t header[3] = {kMagic, 2, static_cast<std::uint32_t>(total)};
-    const std::uint32_t json_head[2] = {static_cast<std::uint32_t>(json.size()), kJsonChunk};
-    const std::uint32_t bin_head[2] = {static_cast<std::uint32_t>(b.bin.size()), kBinChunk};
-    bool ok = std::fwrite(header, 4, 3, f.get()) == 3 &&
-              std::fwrite(json_head, 4, 2, f.get()) == 2 &&
-              std::fwrite(json.data(), 1, json.size(), f.get()) == json.size() &&
-              std::fwrite(bin_head, 4, 2, f.get()) == 2 &&
-              std::fwrite(b.bin.data(), 1, b.bin.size(), f.get()) == b.bin.size();
-    ok = ok && std::fflush(f.get()) == 0 && std::fclose(f.release()) == 0;
-    if (!ok) throw IoError(path, "", "cannot write: " + write_failure(errno));
-  });
+  struct FileCloser {
+    void operator()(std::FILE* f) const { std::fclose(f); }
+  };
+  TemporaryFile out(path);
+  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(out.path().c_str(), "wb"));
+  if (!f) throw IoError(path, "", "cannot open for writing: " + write_failure(errno));
+  const std::uint32_t header[3] = {kMagic, 2, static_cast<std::uint32_t>(total)};
+  const std::uint32_t json_head[2] = {static_cast<std::uint32_t>(json.size()), kJsonChunk};
+  const std::uint32_t bin_head[2] = {static_cast<std::uint32_t>(b.bin.size()), kBinChunk};
+  bool ok = std::fwrite(header, 4, 3, f.get()) == 3 && std::fwrite(json_head, 4, 2, f.get()) == 2 &&
+            std::fwrite(json.data(), 1, json.size(), f.get()) == json.size() &&
+            std::fwrite(bin_head, 4, 2, f.get()) == 2 &&
+            std::fwrite(b.bin.data(), 1, b.bin.size(), f.get()) == b.bin.size();
+  ok = ok && std::fflush(f.get()) == 0 && std::fclose(f.release()) == 0;
+  if (!ok) throw IoError(path, "", "cannot write: " + write_failure(errno));
+  out.commit();
 }
 
 }  // namespace sinew::postprocess

@@ -23,7 +23,7 @@ struct FileCloser {
 };
 using File = std::unique_ptr<std::FILE, FileCloser>;
 
-// Opens the temporary `tmp` of the file `path` (errors name path).
+// Opens `tmp`, the temporary of the file `path` (errors name path).
 File open_write(const std::string& tmp, const std::string& path) {
   File f(std::fopen(tmp.c_str(), "wb"));
   if (!f) throw IoError(path, "", "cannot open for writing: " + write_failure(errno));
@@ -45,42 +45,41 @@ void finish(File& f, const std::string& path) {
 }  // namespace
 
 void write_pc2(const std::string& path, const SurfaceAnimation& a, const Pc2Options& o) {
-  write_atomically(path, [&](const std::string& tmp) {
-    auto f = open_write(tmp, path);
-    char header[kPc2HeaderBytes] = {};
-    std::memcpy(header, "POINTCACHE2", 12);  // with its terminating NUL
-    const std::int32_t version = 1, points = static_cast<std::int32_t>(a.vertex_count()),
-                       samples = static_cast<std::int32_t>(a.frame_count());
-    std::memcpy(header + 12, &version, 4);
-    std::memcpy(header + 16, &points, 4);
-    std::memcpy(header + 20, &o.start_frame, 4);
-    std::memcpy(header + 24, &o.sample_rate, 4);
-    std::memcpy(header + 28, &samples, 4);
-    put(f.get(), header, sizeof header, path);
-    for (const auto& frame : a.frames)
-      put(f.get(), frame.data(), frame.size() * sizeof(float), path);
-    finish(f, path);
-  });
+  TemporaryFile out(path);
+  auto f = open_write(out.path(), path);
+  char header[kPc2HeaderBytes] = {};
+  std::memcpy(header, "POINTCACHE2", 12);  // with its terminating NUL
+  const std::int32_t version = 1, points = static_cast<std::int32_t>(a.vertex_count()),
+                     samples = static_cast<std::int32_t>(a.frame_count());
+  std::memcpy(header + 12, &version, 4);
+  std::memcpy(header + 16, &points, 4);
+  std::memcpy(header + 20, &o.start_frame, 4);
+  std::memcpy(header + 24, &o.sample_rate, 4);
+  std::memcpy(header + 28, &samples, 4);
+  put(f.get(), header, sizeof header, path);
+  for (const auto& frame : a.frames) put(f.get(), frame.data(), frame.size() * sizeof(float), path);
+  finish(f, path);
+  out.commit();
 }
 
 void write_obj(const std::string& path, const std::vector<float>& positions,
                const std::vector<std::int32_t>& triangles, const std::string& comment) {
-  write_atomically(path, [&](const std::string& tmp) {
-    auto f = open_write(tmp, path);
-    std::string text;
-    text.reserve(positions.size() * 14 + triangles.size() * 8 + 64);
-    if (!comment.empty()) text += "# " + comment + "\n";
-    for (std::size_t i = 0; i + 2 < positions.size(); i += 3) {
-      text +=
-          fmt::format("v {:.9g} {:.9g} {:.9g}\n", positions[i], positions[i + 1], positions[i + 2]);
-    }
-    for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
-      text +=
-          fmt::format("f {} {} {}\n", triangles[t] + 1, triangles[t + 1] + 1, triangles[t + 2] + 1);
-    }
-    put(f.get(), text.data(), text.size(), path);
-    finish(f, path);
-  });
+  TemporaryFile out(path);
+  auto f = open_write(out.path(), path);
+  std::string text;
+  text.reserve(positions.size() * 14 + triangles.size() * 8 + 64);
+  if (!comment.empty()) text += "# " + comment + "\n";
+  for (std::size_t i = 0; i + 2 < positions.size(); i += 3) {
+    text +=
+        fmt::format("v {:.9g} {:.9g} {:.9g}\n", positions[i], positions[i + 1], positions[i + 2]);
+  }
+  for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
+    text +=
+        fmt::format("f {} {} {}\n", triangles[t] + 1, triangles[t + 1] + 1, triangles[t + 2] + 1);
+  }
+  put(f.get(), text.data(), text.size(), path);
+  finish(f, path);
+  out.commit();
 }
 
 std::vector<std::string> write_obj_sequence(const std::string& directory, const SurfaceAnimation& a,
