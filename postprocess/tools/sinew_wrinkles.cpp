@@ -17,12 +17,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "results_options.hpp"
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/common/tool.hpp"
@@ -114,12 +115,6 @@ void put_shared_figures(nlohmann::ordered_json& j, const Figures& f) {
   j["rms_mm"] = json_mm(f.rms);
   j["strain"] = json_num(f.strain);
   j["strain_min"] = json_num(f.strain_min);
-}
-
-std::ofstream open_out(const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw IoError(path, "", "cannot open for writing");
-  return out;
 }
 
 }  // namespace
@@ -281,7 +276,7 @@ int main(int argc, char** argv) {
     }
 
     if (!csv.empty()) {
-      auto out = open_out(csv);
+      std::ostringstream out;
       out << "profile,across_mm,samples,length_rest_mm,length_mm,folds,wavelength_mean_mm,"
              "wavelength_std_mm,spectral_wavelength_mm,depth_mean_mm,depth_max_mm,rms_mm,strain,"
              "strain_min\n";
@@ -302,7 +297,7 @@ int main(int argc, char** argv) {
           << csv_mm(s.spectral_wavelength) << ',' << csv_mm(s.depth_mean) << ','
           << csv_mm(s.depth_max) << ',' << csv_mm(s.rms) << ',' << csv_num(s.strain) << ','
           << csv_num(s.strain_min) << '\n';
-      if (!out) throw IoError(csv, "", "write failed");
+      write_text_atomically(csv, out.str());
       if (!quiet) std::printf("wrote %s\n", csv.c_str());
     }
     if (!json_path.empty()) {
@@ -359,13 +354,13 @@ int main(int argc, char** argv) {
         row["fold_list"] = std::move(folds);
         arr.push_back(std::move(row));
       }
-      auto out = open_out(json_path);
+      std::ostringstream out;
       out << j.dump(2) << '\n';
-      if (!out) throw IoError(json_path, "", "write failed");
+      write_text_atomically(json_path, out.str());
       if (!quiet) std::printf("wrote %s\n", json_path.c_str());
     }
     if (!trace.empty()) {
-      auto out = open_out(trace);
+      std::ostringstream out;
       out << "profile,across_mm,s_mm,arc_mm,residual_mm,local_strain,x_mm,y_mm,z_mm\n";
       for (std::size_t k = 0; k < rep.profiles.size(); ++k) {
         const auto& p = rep.profiles[k];
@@ -376,7 +371,7 @@ int main(int argc, char** argv) {
               << csv_mm(p.rest[3 * i + 2]) << '\n';
         }
       }
-      if (!out) throw IoError(trace, "", "write failed");
+      write_text_atomically(trace, out.str());
       if (!quiet) std::printf("wrote %s\n", trace.c_str());
     }
     return tool::kExitOk;

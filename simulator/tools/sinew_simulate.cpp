@@ -3,7 +3,7 @@
 //
 //   sinew-simulate SCENE [-o OUTDIR] [--explain [--run]] [--device cpu|cuda|auto]
 //                  [--precision float|double] [--threads N] [--quiet] [--restart CKPT]
-//                  [--checkpoint-every N]
+//                  [--checkpoint-every N] [--force]
 //
 // Exit status: 0 done (or plan printed), 1 bad input or I/O error, 2 bad command line,
 // 3 the simulation became unstable (frames written so far stay valid), 130 interrupted (a
@@ -79,6 +79,9 @@ int main(int argc, char** argv) {
   app.add_option("--checkpoint-every", opt.checkpoint_every,
                  "Write <OUTDIR>/checkpoint.h5 every N steps")
       ->check(CLI::NonNegativeNumber);
+  app.add_flag("--force", opt.force,
+               "Run even past the sane limits on steps (1e9), frames (1e5) and probe rows per "
+               "probe (1e8) that catch a duration or interval in the wrong unit");
   app.set_version_flag("--version", std::string(sinew::kVersion));
   try {
     app.parse(argc, argv);

@@ -1,5 +1,5 @@
 // The exports' timing (frame_timing), per-vertex attributes (vertex_attributes: normals, colours)
-// as written into glTF and OBJ files, and the temporary-name-then-rename writes (output_file).
+// as written into glTF and OBJ files, and the temporary-name-then-rename writes (common/atomic_file.hpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "export_test_support.hpp"
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/postprocess/frame_timing.hpp"
 #include "sinew/postprocess/gltf_writer.hpp"
-#include "sinew/postprocess/output_file.hpp"
 #include "sinew/postprocess/pc2_writer.hpp"
 #include "sinew/postprocess/vertex_attributes.hpp"
 
@@ -201,14 +201,15 @@ TEST(ExportAttributes, ObjCarriesNormalsAndColours) {
 TEST(ExportOutputFile, WritesByRenameAndCleansUpAfterAnError) {
   const auto dir = temp_dir("output_file");
   const auto path = (dir / "a.glb").string();
-  write_file_atomically(path, "first");
-  write_file_atomically(path, "second");
+  sinew::write_text_atomically(path, "first");
+  sinew::write_text_atomically(path, "second");
   const auto content = slurp(path);
   EXPECT_EQ(std::string(content.begin(), content.end()), "second");
   // Renaming onto a non-empty directory fails: the temporary file must go.
   fs::create_directories(dir / "taken.glb" / "inside");
-  EXPECT_THROW(write_file_atomically((dir / "taken.glb").string(), "x"), sinew::IoError);
-  EXPECT_THROW(write_file_atomically((dir / "missing" / "a.glb").string(), "x"), sinew::IoError);
+  EXPECT_THROW(sinew::write_text_atomically((dir / "taken.glb").string(), "x"), sinew::IoError);
+  EXPECT_THROW(sinew::write_text_atomically((dir / "missing" / "a.glb").string(), "x"),
+               sinew::IoError);
   std::size_t entries = 0;
   for (const auto& e : fs::directory_iterator(dir)) {
     ++entries;

@@ -103,15 +103,7 @@ std::string write_muscle_scene(const TempDir& dir) {
   return dir / "scene.yaml";
 }
 
-RunOptions options_for(const std::string& scene, const std::string& out) {
-  RunOptions o;
-  o.scene_path = scene;
-  o.output_dir = out;
-  o.device = "cpu";
-  o.quiet = true;
-  o.print = [](const std::string&) {};
-  return o;
-}
+using testing::options_for;
 
 TEST(Runner, ResumedRunIsBitIdenticalToAnUninterruptedOne) {
   TempDir dir("restart");

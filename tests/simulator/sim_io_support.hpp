@@ -13,6 +13,7 @@
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model.hpp"
 #include "sinew/formats/model_file.hpp"
+#include "sinew/simulator/runner.hpp"
 
 namespace sinew::simulator::testing {
 
@@ -51,6 +52,17 @@ inline std::string read_file(const std::string& path) {
 inline void write_file(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out << text;
+}
+
+// Options of a quiet CPU run of `scene` into `out` that prints nothing.
+inline RunOptions options_for(const std::string& scene, const std::string& out) {
+  RunOptions o;
+  o.scene_path = scene;
+  o.output_dir = out;
+  o.device = "cpu";
+  o.quiet = true;
+  o.print = [](const std::string&) {};
+  return o;
 }
 
 inline formats::Material soft_material(const std::string& name = "soft") {

@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <atomic>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -10,6 +12,7 @@
 #include <new>
 #include <type_traits>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 
 namespace sinew::formats::hdf5 {
@@ -51,9 +54,38 @@ herr_t innermost(unsigned, const H5E_error2_t* err, void* data) {
   return 0;
 }
 
-IoError io_fail(const std::string& file, const std::string& name, const std::string& what) {
-  return IoError(file, name, what + error_detail());
+// A failed system call inside HDF5's file driver reads "... errno = 28, error message = 'No space
+// left on device', buf = 0x..., bytes actually written = 18446744073709551615, ..." (the -1 of
+// write() as unsigned): reduce that to the reason alone.
+std::string system_reason(const std::string& detail) {
+  const std::string key = "errno = ";
+  const auto at = detail.find(key);
+  if (at == std::string::npos) return {};
+  const int err = std::atoi(detail.c_str() + at + key.size());
+  return err > 0 ? write_failure(err) : std::string();
 }
+
+IoError io_fail(const std::string& file, const std::string& name, const std::string& what) {
+  const std::string detail = error_detail();
+  const std::string reason = system_reason(detail);
+  return IoError(file, name, reason.empty() ? what + detail : what + ": " + reason);
+}
+
+// Set when closing a file failed (a full disk at the final flush). HDF5 1.10 then keeps a
+// half-torn-down file in its ID table and segfaults closing it again in its atexit handler
+// (H5F__close_cb), so the library is terminated at exit only while no file close has failed.
+std::atomic<bool> file_close_failed{false};
+
+struct LibraryLifetime {
+  LibraryLifetime() {
+    if (H5dont_atexit() >= 0) {
+      std::atexit([] {
+        if (!file_close_failed.load()) H5close();
+      });
+    }
+  }
+};
+const LibraryLifetime library_lifetime;
 FormatError format_fail(const std::string& file, const std::string& name, const std::string& what) {
   return FormatError(file, name, what + error_detail());
 }
@@ -242,12 +274,13 @@ Handle& Handle::operator=(Handle&& o) noexcept {
 }
 
 void Handle::reset() {
-  if (id_ >= 0 && closer_) closer_(id_);
-  id_ = -1;
+  // A failed close here is already being handled (an exception unwinding): drop its error stack.
+  if (!close()) H5Eclear2(H5E_DEFAULT);
 }
 
 bool Handle::close() {
   const herr_t status = id_ >= 0 && closer_ ? closer_(id_) : 0;
+  if (status < 0 && closer_ == &H5Fclose) file_close_failed.store(true);
   id_ = -1;
   return status >= 0;
 }

@@ -8,6 +8,10 @@
 //   IoError      a file that cannot be created, opened, written, flushed or closed;
 //   FormatError  a file whose contents are not what the caller asked for: a missing group,
 //                dataset or attribute, a wrong dtype or shape, data that cannot be read back.
+// A system error inside HDF5's file driver is reported by its reason alone ("cannot write the
+// dataset: no space left on the device (disk full)"), not HDF5's raw driver text. A file whose
+// close fails (a full disk at the final flush) does not crash the process at exit: the library's
+// own atexit clean-up, which segfaults on such a file in HDF5 1.10, is then skipped.
 // HDF5's own printing of its error stack is switched off (quiet_errors(), called by every
 // function that opens or creates a file), so a corrupt file gives one exception and no noise.
 //

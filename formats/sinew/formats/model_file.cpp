@@ -1,8 +1,5 @@
 #include "sinew/formats/model_file.hpp"
 
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -11,7 +8,9 @@
 
 #include <fmt/format.h>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/formats/file_kind.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/validate.hpp"
 
@@ -226,6 +225,10 @@ class Reader {
         fail(std::string("/") + name, "missing root attribute (not a sinew model file?)");
       }
     };
+    if (hdf5::has_attribute(file_, "format") && !has_format(file_, path_, kModelFormatName)) {
+      throw wrong_kind(file_, path_, "a sinew model file",
+                       "give a model written by sinew-voxelize or sinew-generate");
+    }
     require("format");
     const std::string format = hdf5::string_attribute(file_, "format", path_);
     if (format != kModelFormatName) {
@@ -494,22 +497,11 @@ Model read_all(Reader& r) {
 
 void write_model(const Model& model, const std::string& path) {
   validate_model(model, path);
-  const std::string tmp = path + ".tmp-" + std::to_string(static_cast<long>(getpid()));
-  try {
+  write_atomically(path, [&](const std::string& tmp) {
     Writer w(tmp, path);
     write_all(w, model);
     w.close();
-  } catch (...) {
-    std::remove(tmp.c_str());
-    throw;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(tmp.c_str());
-    throw IoError(
-        path, "",
-        std::string("cannot rename the temporary file into place: ") + std::strerror(err));
-  }
+  });
 }
 
 Model read_model(const std::string& path) {

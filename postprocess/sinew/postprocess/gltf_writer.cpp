@@ -3,14 +3,15 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
-#include "sinew/postprocess/output_file.hpp"
 
 namespace sinew::postprocess {
 namespace {
@@ -203,7 +204,7 @@ FrameTiming write_glb(const std::string& path, const SurfaceAnimation& a, const 
   put(json.data(), json.size());
   put(bin_head, sizeof bin_head);
   put(b.bin.data(), b.bin.size());
-  write_file_atomically(path, bytes);
+  write_text_atomically(path, bytes);
   return timing;
 }
 

@@ -40,7 +40,7 @@ struct GltfOptions {
   VertexScalar color = VertexScalar::none;  // COLOR_0 and _DISPLACEMENT when displacement
 };
 
-// Writes the .glb (output_file.hpp: never half-written under `path`) and returns the timing used;
+// Writes the .glb (common/atomic_file.hpp: never half-written under `path`) and returns the timing used;
 // throws IoError when the file cannot be written, ConfigError on a bad fps or time scale
 // (frame_timing).
 FrameTiming write_glb(const std::string& path, const SurfaceAnimation& animation,

@@ -6,8 +6,8 @@
 #include <cstring>
 #include <filesystem>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
-#include "sinew/postprocess/output_file.hpp"
 #include "sinew/postprocess/rasterizer.hpp"
 
 namespace sinew::postprocess {
@@ -33,7 +33,7 @@ void write_pc2(const std::string& path, const SurfaceAnimation& a, const Pc2Opti
   for (const auto& frame : a.frames) {
     bytes.append(reinterpret_cast<const char*>(frame.data()), frame.size() * sizeof(float));
   }
-  write_file_atomically(path, bytes);
+  write_text_atomically(path, bytes);
 }
 
 void write_obj(const std::string& path, const std::vector<float>& positions,
@@ -65,7 +65,7 @@ void write_obj(const std::string& path, const std::vector<float>& positions,
     text += n.empty() ? fmt::format("f {} {} {}\n", a, b, d)
                       : fmt::format("f {0}//{0} {1}//{1} {2}//{2}\n", a, b, d);
   }
-  write_file_atomically(path, text);
+  write_text_atomically(path, text);
 }
 
 std::vector<std::string> write_obj_sequence(const std::string& directory, const SurfaceAnimation& a,

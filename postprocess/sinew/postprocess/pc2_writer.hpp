@@ -17,7 +17,7 @@
 // default) shows sample (scene frame − the modifier's Frame Start, default 0) and ignores the
 // header's start frame and rate, so results frame k shows at Blender frame k, as in the glTF
 // export by default; the header says the same (start frame 0, one sample per frame) for readers
-// that use it. Every file is written to a temporary name and renamed (output_file.hpp).
+// that use it. Every file is written to a temporary name and renamed (common/atomic_file.hpp).
 #include <cstdint>
 #include <string>
 #include <vector>

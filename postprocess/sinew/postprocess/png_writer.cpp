@@ -2,11 +2,13 @@
 
 #include <png.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 
 namespace sinew::postprocess {
@@ -108,13 +110,20 @@ bool read_rows(png_structp png, png_bytepp rows) {
 }  // namespace
 
 void write_png(const std::string& path, const Image& image) {
-  File f(std::fopen(path.c_str(), "wb"));
-  if (!f) throw IoError(path, "", "cannot open for writing");
-  PngStructs p(PngStructs::Mode::write, path);
-  if (!write_all(p.png, p.info, f.get(), &image)) {
-    throw IoError(path, "", std::string("cannot write the PNG: ") + p.ctx.message);
-  }
-  if (std::fflush(f.get()) != 0) throw IoError(path, "", "cannot write (disk full?)");
+  write_atomically(path, [&](const std::string& tmp) {
+    File f(std::fopen(tmp.c_str(), "wb"));
+    if (!f) throw IoError(path, "", "cannot open for writing: " + write_failure(errno));
+    PngStructs p(PngStructs::Mode::write, path);
+    errno = 0;
+    if (!write_all(p.png, p.info, f.get(), &image)) {
+      // libpng says only "Write Error" for a failed fwrite; errno tells a full disk apart.
+      const std::string why = errno != 0 ? write_failure(errno) : p.ctx.message;
+      throw IoError(path, "", "cannot write the PNG: " + why);
+    }
+    if (std::fflush(f.get()) != 0 || std::fclose(f.release()) != 0) {
+      throw IoError(path, "", "cannot write: " + write_failure(errno));
+    }
+  });
 }
 
 Image read_png(const std::string& path) {

@@ -10,6 +10,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/formats/file_kind.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/results_format.hpp"
 
@@ -28,11 +29,9 @@ h5::Handle open_results(const std::string& path) {
     throw FormatError(path, "", "not an HDF5 file (expected sinew results, results.h5)");
   }
   auto file = h5::open_file(path, false);
-  if (!h5::has_attribute(file, "format") ||
-      h5::string_attribute(file, "format", path) != kResultsFormatName) {
-    throw FormatError(path, "format",
-                      fmt::format("not a sinew results file (root attribute format != \"{}\")",
-                                  kResultsFormatName));
+  if (!formats::has_format(file, path, kResultsFormatName)) {
+    throw formats::wrong_kind(file, path, "a sinew results file",
+                              "give the results.h5 that sinew-simulate wrote");
   }
   if (!h5::has_attribute(file, "format_version") ||
       h5::int_attribute(file, "format_version", path) != kResultsFormatVersion) {
@@ -196,6 +195,16 @@ SurfaceAnimation read_volume_boundary(const std::string& path) {
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       const auto node = static_cast<std::size_t>(nodes[i]);
       for (std::size_t k = 0; k < 3; ++k) {
+        // Name the stored dataset that holds a NaN, not the derived /surfaces/volume/positions.
+        if (!std::isfinite(rest[3 * node + k])) {
+          throw FormatError(path, "/mesh/rest_positions", "non-finite coordinate")
+              .at(static_cast<std::int64_t>(node));
+        }
+        if (!std::isfinite(u[(f * n + node) * 3 + k])) {
+          throw FormatError(path, "/frames/displacement",
+                            fmt::format("non-finite value at node {} in frame {}", node, f))
+              .at(static_cast<std::int64_t>(f));
+        }
         x[3 * i + k] = static_cast<float>(rest[3 * node + k]) + u[(f * n + node) * 3 + k];
       }
     }

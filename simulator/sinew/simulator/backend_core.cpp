@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <fmt/format.h>
 
@@ -210,7 +211,18 @@ BackendCore::BackendCore(const formats::Model& model, const Setup& setup, Plan p
   const double eps = setup.precision == Precision::float32
                          ? double(std::numeric_limits<float>::epsilon())
                          : double(std::numeric_limits<double>::epsilon());
-  energy_floor_ = eps * prepared_.volume * prepared_.min_modulus;
+  // The round-off floor of the blow-up test (docs/physics.md "Instability"): the strain energy of
+  // a strain of order √ε at the softest modulus, plus the kinetic energy of every node moving by
+  // one rounding of its position, ε · |x|, per step: motion the positions cannot resolve. A body
+  // at rest in float (sliding projections, elements far from the origin) moves that fast from
+  // round-off alone, so without the second term its stop test compared noise with a near-zero
+  // reference.
+  double extent = 0, mass = 0;
+  for (const auto& x : prepared_.rest) extent = std::max(extent, std::hypot(x[0], x[1], x[2]));
+  for (double m : prepared_.mass) mass += m;
+  const double noise_speed = eps * extent / plan_.dt;
+  energy_floor_ =
+      eps * prepared_.volume * prepared_.min_modulus + 0.5 * mass * noise_speed * noise_speed;
 }
 
 std::size_t BackendCore::step_scalar_count() const {
@@ -289,14 +301,27 @@ void BackendCore::fail_displacement(std::int64_t step, Index node) const {
 void BackendCore::fail_blowup(std::int64_t step, double kinetic, double work, Index fastest,
                               double speed) const {
   const auto& p = prepared_.rest[std::size_t(fastest)];
+  // The physical part of the reference; when it is below the round-off floor the body was at
+  // rest or barely loaded, and the growth may be noise (float) rather than a too-large step.
+  const double physical =
+      std::max(0.0, initial_energy_) + std::abs(work) + prepared_.active_energy_bound;
+  const std::string advice =
+      physical < energy_floor_
+          ? fmt::format(
+                "The reference was near zero ({:.3g} J of energy and work, below the round-off "
+                "floor {:.3g} J): a body at rest or barely loaded, so this may be round-off noise "
+                "growing, not a too-large step; try precision double first. Lower the time step "
+                "(or its safety factor) if the motion is real",
+                physical, energy_floor_)
+          : std::string("Lower the time step (or its safety factor)");
   throw InstabilityError(
       "", "simulation",
       fmt::format("kinetic energy blow-up at step {}, t = {:.6g} s: {:.6g} J > {} × {:.6g} J "
-                  "(initial energy + |external work| + active-muscle bound); fastest node {} "
-                  "(rest position ({:.6g}, {:.6g}, {:.6g}) m, speed {:.6g} m/s); Δt = {:.6g} s. "
-                  "Lower the time step (or its safety factor)",
+                  "(initial energy + |external work| + active-muscle bound + round-off floor); "
+                  "fastest node {} (rest position ({:.6g}, {:.6g}, {:.6g}) m, speed {:.6g} m/s); "
+                  "Δt = {:.6g} s. {}",
                   step, time(step), kinetic, setup_.blowup_factor, blowup_reference(work), fastest,
-                  p[0], p[1], p[2], speed, dt()))
+                  p[0], p[1], p[2], speed, dt(), advice))
       .at(std::int64_t(fastest));
 }
 

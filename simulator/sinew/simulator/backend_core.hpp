@@ -177,7 +177,10 @@ class BackendCore {
   Plan plan_;
   PreparedModel prepared_;
   std::size_t muscle_count_ = 0;
-  double energy_floor_ = 0;    // J, ε · volume · min modulus: the strain energy's round-off
+  // J, ε · volume · min modulus (the strain energy's round-off) + ½ · total mass · (ε · max |x| /
+  // Δt)² (the kinetic energy of positions moving by their own round-off each step); docs/physics.md
+  // "Instability".
+  double energy_floor_ = 0;
   double initial_energy_ = 0;  // J, max(0, initial kinetic + strain + hourglass energy)
 };
 

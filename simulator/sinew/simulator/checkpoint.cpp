@@ -1,12 +1,12 @@
 #include "sinew/simulator/checkpoint.hpp"
 
-#include <unistd.h>
-
 #include <cstdio>
 
 #include <fmt/format.h>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/formats/file_kind.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/sha256.hpp"
 
@@ -27,9 +27,8 @@ std::string run_digest(const std::string& scene_text, const std::string& model_p
 }
 
 void write_checkpoint(const std::string& path, const Checkpoint& c) {
-  const auto tmp = path + ".tmp-" + std::to_string(::getpid());
-  {
-    auto f = h5::create_file(tmp);
+  write_atomically(path, [&](const std::string& tmp) {
+    auto f = h5::create_file(tmp, path);
     h5::set_attribute(f, "format", std::string(kCheckpointFormatName), tmp);
     h5::set_attribute(f, "format_version", std::int64_t{kCheckpointFormatVersion}, tmp);
     h5::set_attribute(f, "digest", c.digest, tmp);
@@ -48,19 +47,16 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
     h5::write(f, "/u", {n, 3}, s.u.data(), tmp);
     h5::write(f, "/u_prev", {n, 3}, s.u_prev.data(), tmp);
     h5::write(f, "/sliding_triangle", {s.sliding_triangle.size()}, s.sliding_triangle.data(), tmp);
-    h5::flush(f, tmp);
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw IoError(path, "", "cannot rename the checkpoint into place");
-  }
+    h5::close_file(f, path);
+  });
 }
 
 Checkpoint read_checkpoint(const std::string& path) {
   auto f = h5::open_file(path, false);
-  if (!h5::has_attribute(f, "format") ||
-      h5::string_attribute(f, "format", path) != kCheckpointFormatName) {
-    throw FormatError(path, "format", "not a sinew checkpoint file");
+  if (!formats::has_format(f, path, kCheckpointFormatName)) {
+    throw formats::wrong_kind(
+        f, path, "a sinew checkpoint",
+        "--restart takes the checkpoint.h5 of an interrupted run's output folder");
   }
   const auto version = h5::int_attribute(f, "format_version", path);
   if (version != kCheckpointFormatVersion) {

@@ -38,6 +38,21 @@ std::string human_bytes(std::size_t b) {
 const char* precision_name(Precision p) {
   return p == Precision::float32 ? "float" : "double";
 }
+// An automatic step with no finite estimate: say which input makes it so. No stiffness at all is
+// the scene's doing (effects off); a stiff model whose h/c is still astronomic has a voxel size
+// in the wrong unit (mass_scaling is bounded above, so it cannot be the cause).
+[[noreturn]] void explain_no_step(const formats::Model& model, const Plan& plan, double dt_crit,
+                                  double max_modulus) {
+  if (!(max_modulus > 0))
+    throw ConfigError("", "time_step", "no stiffness to estimate a step from; give a user Δt");
+  throw ConfigError(
+      "", "model.grid.voxel_size",
+      fmt::format("the model's voxel size {:.6g} m gives a stable step h/c of {:.3g} s at element "
+                  "{}, more than the engine can step; the model's units are wrong (sinew models "
+                  "are in metres) or the model is damaged",
+                  model.grid.voxel_size, dt_crit, plan.dt_critical_element));
+}
+
 const char* modulus_name(HourglassModulus m) {
   return m == HourglassModulus::shear ? "shear (M* = 2μ)" : "p-wave (M* = λ + 2μ)";
 }
@@ -70,6 +85,11 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
     bad("model.material_offsets", "expected element count + 1 entries");
   if (!(setup.duration >= 0)) bad("duration", "must be ≥ 0");
   if (!(setup.mass_scaling > 0)) bad("mass_scaling", "must be > 0");
+  if (!(setup.mass_scaling <= kMaxMassScaling))
+    bad("mass_scaling",
+        fmt::format("{:.6g} is above {:.0e} (Δt × {:.0e}): inertia would be "
+                    "meaningless; mass scaling is a modest factor",
+                    setup.mass_scaling, kMaxMassScaling, std::sqrt(kMaxMassScaling)));
   if (!(setup.time_scaling > 0)) bad("time_scaling", "must be > 0");
   if (fx.damping && !(setup.damping_alpha >= 0)) bad("damping_alpha", "must be ≥ 0");
   if (!(setup.hourglass.kappa >= 0)) bad("hourglass.kappa", "must be ≥ 0");
@@ -215,11 +235,13 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
 
   // ---- time step ----
   double dt_crit = std::numeric_limits<double>::infinity();
+  double max_modulus = 0;
   for (std::size_t e = 0; e < n_elems; ++e) {
     const auto& r = plan.parameters[std::size_t(plan.parameter_row[e])];
     double modulus = fx.elasticity ? r.p_wave : 0.0;
     if (fx.muscles) modulus += muscle_modulus[e];
     if (!fx.elasticity && fx.hourglass) modulus += r.hourglass_k / h;  // only resistance left
+    max_modulus = std::max(max_modulus, modulus);
     const double dte = physics::critical_time_step(h, modulus, r.density);
     if (dte < dt_crit) {
       dt_crit = dte;
@@ -235,7 +257,7 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
                              : std::string("no stiffness in the model");
   switch (ts.policy) {
     case TimeStepPolicy::automatic:
-      if (!finite) bad("time_step", "no stiffness to estimate a step from; give a user Δt");
+      if (!finite) explain_no_step(model, plan, dt_crit, max_modulus);
       plan.dt = allowed;
       plan.dt_reason = fmt::format("automatic: {} × Δt_crit {:.6g} s (= h/c at {})",
                                    ts.safety_factor, dt_crit, where);
@@ -271,9 +293,20 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
         "(≈ 0.85 h/c at ν = 0.49, less with hourglass stiffness or compression); the run stops "
         "with a clear message if it does",
         plan.dt / dt_crit, kSafeCourantShare));
-  plan.steps = setup.duration > 0
-                   ? static_cast<std::int64_t>(std::ceil(setup.duration / plan.dt - 1e-9))
-                   : 0;
+  // Counted in double first: a huge duration (or time_scaling) must be refused, not wrap around
+  // to a negative int64 and "complete" after 0 steps. 2^53 is where step indices stop being
+  // exact in the double time arithmetic; run_limits.hpp sets the (overridable) sane limit.
+  const double steps = setup.duration > 0 ? std::ceil(setup.duration / plan.dt - 1e-9) : 0.0;
+  if (!(steps <= 0x1p53)) {
+    bad(setup.time_scaling != 1 ? "time_scaling" : "duration",
+        fmt::format(
+            "duration {:.6g} s{} at Δt = {:.3g} s is {:.3g} steps, more than a run can count",
+            setup.duration / setup.time_scaling,
+            setup.time_scaling != 1 ? fmt::format(" × time_scaling {:.6g}", setup.time_scaling)
+                                    : std::string(),
+            plan.dt, steps));
+  }
+  plan.steps = static_cast<std::int64_t>(steps);
   if (setup.mass_scaling != 1)
     plan.warnings.push_back(fmt::format(
         "mass scaling × {}: densities scaled, Δt × {:.4g}; inertia is wrong by this factor",

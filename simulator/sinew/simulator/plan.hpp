@@ -75,6 +75,10 @@ struct Plan {
 // hexahedra with lumped mass are stable only to about 0.85 h/c at ν = 0.49 (time_step.hpp).
 inline constexpr double kSafeCourantShare = 0.8;
 
+// mass_scaling above this is refused: Δt would grow by more than 10⁴ and the inertia be wrong by
+// 10⁸, a value in the wrong unit rather than a choice (it also keeps the step estimate finite).
+inline constexpr double kMaxMassScaling = 1e8;
+
 // Throws ConfigError (file "", field = the Setup field, e.g. "time_step.user_dt") on bad input:
 // ids out of range, Δt above the estimate without `forced`, non-positive duration, densities ≤ 0 …
 Plan make_plan(const formats::Model& model, const Setup& setup);

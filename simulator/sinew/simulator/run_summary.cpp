@@ -1,13 +1,12 @@
 #include "sinew/simulator/run_summary.hpp"
 
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 
 namespace sinew::simulator {
@@ -71,17 +70,15 @@ std::string to_json(const RunSummary& s) {
 }
 
 void write_run_summary(const std::string& path, const RunSummary& summary) {
-  const auto tmp = path + ".tmp-" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError(tmp, "", "cannot create the run summary");
-    out << to_json(summary);
-    out.flush();
-    if (!out) throw IoError(tmp, "", "cannot write the run summary");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw IoError(path, "", "cannot rename the run summary into place");
+  const std::string json = to_json(summary);
+  try {
+    write_text_atomically(path, json);
+  } catch (const IoError&) {
+    // Most likely a full disk. The summary in place then says "running" (or an older frame count)
+    // for a run that is ending: remove it, which also frees its space, and try once more. If that
+    // fails too, no summary is better than a wrong one.
+    std::remove(path.c_str());
+    write_text_atomically(path, json);
   }
 }
 

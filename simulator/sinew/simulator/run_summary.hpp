@@ -44,7 +44,9 @@ struct RunSummary {
 
 // The JSON text of a summary (2-space indented).
 std::string to_json(const RunSummary& summary);
-// Writes it to `path` via a temporary file and rename. Throws IoError.
+// Writes it to `path` via a temporary file and rename (atomic_file.hpp). When that fails (a full
+// disk) the summary already there is removed, so none is left describing an earlier state, and
+// the write is tried once more. Throws IoError.
 void write_run_summary(const std::string& path, const RunSummary& summary);
 // The energy history of an existing summary; empty when the file is missing or unreadable (it is
 // informational and never blocks a restart).

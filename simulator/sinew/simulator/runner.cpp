@@ -25,6 +25,7 @@
 #include "sinew/simulator/probes.hpp"
 #include "sinew/simulator/results_writer.hpp"
 #include "sinew/simulator/run_estimate.hpp"
+#include "sinew/simulator/run_limits.hpp"
 
 namespace sinew::simulator {
 
@@ -95,6 +96,10 @@ class Schedule {
     if (step >= last_) return std::numeric_limits<std::int64_t>::max();
     if (every_) return step + 1;
     if (!(interval_ > 0)) return last_;
+    // Jump to the events of this step first: with an interval far below Δt, counting up one
+    // event at a time would take interval/Δt iterations per step.
+    const double first = std::min(double(step) * dt_ / (interval_ * scaling_), 0x1p62);
+    k_ = std::max(k_, static_cast<std::int64_t>(first) - 1);
     while (event_step(k_, interval_, scaling_, dt_) <= step) ++k_;
     return std::min(event_step(k_, interval_, scaling_, dt_), last_);
   }
@@ -159,6 +164,12 @@ RunResult run_scene(const RunOptions& options) {
   const auto scene_text = read_text(options.scene_path);
   const auto scene = parse_scene_text(scene_text, options.scene_path,
                                       fs::path(options.scene_path).parent_path().string());
+  if (!fs::exists(scene.model_path)) {
+    throw ConfigError(options.scene_path, "model",
+                      fmt::format("the model file '{}' does not exist (model: {}, relative to the "
+                                  "scene's folder)",
+                                  scene.model_path, scene.model));
+  }
   const formats::Model model = formats::read_model(scene.model_path);
   ResolveOptions ro;
   ro.precision = options.precision;
@@ -218,6 +229,7 @@ RunResult run_scene(const RunOptions& options) {
     }
   }
 
+  const auto counts = count_outputs(model, plan, resolved);
   if (options.explain) {
     std::string text = plan.explain();
     if (!text.empty() && text.back() != '\n') text += '\n';
@@ -231,6 +243,7 @@ RunResult run_scene(const RunOptions& options) {
         "  frames every {} s of scene time ({}), fields: {}\n",
         resolved.output_interval > 0 ? fmt::format("{:.6g}", resolved.output_interval) : "-",
         resolved.output_interval > 0 ? "plus the first and last" : "first and last only", fields);
+    text += describe_outputs(counts);
     for (const auto& p : resolved.probes)
       text += fmt::format("  probe '{}': {}\n", p.name, p.description);
     for (const auto& w : summary.warnings) text += fmt::format("  warning: {}\n", w);
@@ -243,6 +256,7 @@ RunResult run_scene(const RunOptions& options) {
     print(text);
   }
   if (!options.run) return result;
+  check_output_limits(counts, resolved, options.scene_path, options.force);
 
   if (options.output_dir.empty()) throw ConfigError("", "--output", "no output directory given");
   std::error_code ec;

@@ -27,8 +27,9 @@ struct RunOptions {
   bool quiet = false;                  // no progress bar
   bool explain = false;                // print the plan first
   bool run = true;                     // false: stop after the plan
-  std::string restart;                 // checkpoint to resume from ("" none)
-  std::int64_t checkpoint_every = 0;   // steps between checkpoints (0: none)
+  bool force = false;   // run past the step, frame and probe-row limits (run_limits.hpp)
+  std::string restart;  // checkpoint to resume from ("" none)
+  std::int64_t checkpoint_every = 0;  // steps between checkpoints (0: none)
   // Stop once this step is reached, writing a checkpoint there, as an interruption would (tests
   // use it to cut a run in two); −1: run to the end.
   std::int64_t stop_at_step = -1;

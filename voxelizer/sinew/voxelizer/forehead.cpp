@@ -7,6 +7,7 @@
 #include <functional>
 #include <numbers>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 
 namespace sinew::voxelizer {
@@ -404,10 +405,7 @@ std::vector<std::filesystem::path> write_forehead(const ForeheadParams& p,
         *meshes[k], {"sinew-forehead: " + meshes[k]->source + " (docs/forehead.md)",
                      "units: mm; x right, y up, z forward",
                      closed ? "closed, outward oriented" : "open: the skin's top surface"});
-    std::ofstream f(path, std::ios::binary);
-    f << text;
-    f.close();
-    if (!f) throw IoError(path.string(), "", "cannot write the mesh");
+    write_text_atomically(path.string(), text);
     written.push_back(path);
   }
   return written;
