@@ -216,5 +216,70 @@ TEST(Hdf5File, BrokenFilesGiveTypedErrors) {
   }
 }
 
+// The global heap (variable-length strings) has no checksum and HDF5 follows it blindly (one
+// flipped byte of a model file once segfaulted H5HG_read): the readers check it first.
+TEST(Hdf5File, DamagedGlobalHeapIsAFormatError) {
+  const auto sample = write_sample();
+  const auto good = file_bytes(sample);
+  const auto heap = good.find("GCOL");
+  ASSERT_NE(heap, std::string::npos);
+  haddr_t names_at = HADDR_UNDEF;
+  {
+    auto f = open_checked(sample);
+    Handle ds(H5Dopen2(f, "/data/names", H5P_DEFAULT), H5Dclose);
+    names_at = H5Dget_offset(ds);
+  }
+  ASSERT_NE(names_at, HADDR_UNDEF);
+  const auto damaged = temp_path("damaged.h5");
+  const auto write_with = [&](std::size_t at, const std::string& bytes) {
+    auto b = good;
+    b.replace(at, bytes.size(), bytes);
+    std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+        .write(b.data(), static_cast<std::streamsize>(b.size()));
+  };
+  // The first object's size (after the 16-byte collection header: index, count, reserved, size).
+  write_with(heap + 16 + 8, std::string(8, '\xff'));
+  {
+    auto f = open_checked(damaged);
+    EXPECT_CONTAINS(error_of<FormatError>([&] { read_strings(f, "/data/names", damaged); }),
+                    damaged + ": /data/names: string 0: its global heap collection");
+    EXPECT_CONTAINS(error_of<FormatError>([&] { string_attribute(f, "label", damaged); }),
+                    "/label: the global heap collection at byte");
+  }
+  // The first string's object index (after its length and the collection's address).
+  write_with(static_cast<std::size_t>(names_at) + 4 + 8, std::string("\x39\x05\0\0", 4));
+  {
+    auto f = open_checked(damaged);
+    EXPECT_CONTAINS(error_of<FormatError>([&] { read_strings(f, "/data/names", damaged); }),
+                    "string 0: its heap reference (collection");
+    EXPECT_EQ(string_attribute(f, "label", damaged), "utf-8 é");  // its own reference is intact
+  }
+  // A length that disagrees with the object (HDF5 would copy the object into a shorter buffer).
+  write_with(static_cast<std::size_t>(names_at), std::string("\x02\0\0\0", 4));
+  {
+    auto f = open_checked(damaged);
+    EXPECT_CONTAINS(error_of<FormatError>([&] { read_strings(f, "/data/names", damaged); }),
+                    "string 0: its heap reference");
+  }
+}
+
+// Files are written in the 1.8+ format, whose object headers carry checksums: a flipped byte in
+// the root group's header is refused instead of followed.
+TEST(Hdf5File, ObjectHeadersAreChecksummed) {
+  const auto good = file_bytes(write_sample());
+  const auto header = good.find("OHDR");
+  ASSERT_NE(header, std::string::npos) << "no version 2 object header: not the 1.8+ format";
+  auto b = good;
+  b[header + 20] = static_cast<char>(b[header + 20] ^ 0x10);
+  const auto damaged = temp_path("damaged.h5");
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+      .write(b.data(), static_cast<std::streamsize>(b.size()));
+  const auto message = error_of<FormatError>([&] {
+    auto f = open_checked(damaged);
+    (void)string_attribute(f, "format", damaged);
+  });
+  EXPECT_CONTAINS(message, damaged);
+}
+
 }  // namespace
 }  // namespace sinew::formats::hdf5

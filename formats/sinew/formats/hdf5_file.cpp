@@ -1,4 +1,5 @@
 #include "sinew/formats/hdf5_file.hpp"
+#include "sinew/formats/hdf5_heap_check.hpp"
 
 #include <fmt/format.h>
 
@@ -166,6 +167,7 @@ std::vector<std::string> read_string_values(hid_t ds, std::size_t n, const std::
   if (n == 0) return out;
   Handle type(H5Dget_type(ds), H5Tclose);
   if (H5Tis_variable_str(type) > 0) {
+    check_vlen_dataset(ds, file, name);  // the heap is unchecksummed; HDF5 would trust it
     Handle mem = utf8_string_type();
     std::vector<char*> ptrs(n, nullptr);
     if (H5Dread(ds, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0) {
@@ -553,11 +555,6 @@ void create_frame_view(hid_t loc, const std::string& name, const std::string& so
   if (!ds.valid()) throw io_fail(file, name, "cannot create the frame view");
 }
 
-void remove_link(hid_t loc, const std::string& name, const std::string& file) {
-  if (!exists(loc, name)) return;
-  if (H5Ldelete(loc, name.c_str(), H5P_DEFAULT) < 0) throw io_fail(file, name, "cannot remove");
-}
-
 // ---- Attributes -------------------------------------------------------------------------------
 
 void set_attribute(hid_t obj, const std::string& name, const std::string& value,
@@ -600,6 +597,7 @@ std::string string_attribute(hid_t obj, const std::string& name, const std::stri
   Handle a = open_attribute(obj, name, file, H5T_STRING, "string");
   Handle t(H5Aget_type(a), H5Tclose);
   if (H5Tis_variable_str(t) > 0) {
+    check_global_heaps(obj, file, attribute_path(obj, name));  // as for string datasets
     Handle mem = utf8_string_type();
     char* value = nullptr;
     if (H5Aread(a, mem, &value) < 0) {

@@ -140,8 +140,6 @@ void set_frames(hid_t dataset, hsize_t frames, const std::string& file, const st
 // the XDMF index) can name one frame. Intermediate groups are created. IoError on failure.
 void create_frame_view(hid_t loc, const std::string& name, const std::string& source, hsize_t frame,
                        const std::string& file);
-// Unlinks `name` when it exists (its space is not reclaimed). IoError on failure.
-void remove_link(hid_t loc, const std::string& name, const std::string& file);
 
 // ---- Attributes (one value each) -------------------------------------------------------------
 

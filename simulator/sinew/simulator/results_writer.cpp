@@ -217,10 +217,6 @@ std::unique_ptr<ResultsWriter> ResultsWriter::resume(const std::string& director
     impl.surfaces.push_back(open(surface_group(model.surfaces[s]) + "/positions"));
     impl.surface_displacements.push_back(open(surface_group(model.surfaces[s]) + "/displacement"));
   }
-  // Views of dropped frames go (a killed run may have left views of a frame without its time).
-  for (auto f = keep; h5::exists(impl.file, view_group(f)); ++f) {
-    h5::remove_link(impl.file, view_group(f), p);
-  }
   h5::flush(impl.file, p);
   w->write_index();
   return w;
@@ -264,8 +260,14 @@ void ResultsWriter::append_frame(double time, std::int64_t step, const std::vect
                surface_group(surf) + "/displacement");
   }
   const auto views = view_group(f);
+  // A view names a frame index, not its data: after a resume the views of dropped frames (a killed
+  // run may also have left some of a frame whose time it never wrote) show the new frame at their
+  // index, so they stay. Deleting them would make HDF5 follow the global heap their mappings are
+  // stored in, which no checksum covers (a damaged one hung H5Ldelete in the fuzz test).
   const auto view = [&](bool on, const std::string& series, const std::string& name) {
-    if (on) h5::create_frame_view(impl.file, views + "/" + name, series, f, p);
+    if (on && !h5::exists(impl.file, views + "/" + name)) {
+      h5::create_frame_view(impl.file, views + "/" + name, series, f, p);
+    }
   };
   view(true, "/frames/displacement", "displacement");
   view(options_.stress, "/frames/von_mises", "von_mises");
