@@ -297,7 +297,9 @@ TEST_F(Fuzz, ModelFiles) {
        path("case.model.h5"),
        [](const std::string& p) {
          // As sinew-inspect: read (and validate), then summarize what was accepted.
-         formats::summary_json(formats::summarize(formats::read_model(p)));
+         const auto summary = formats::summarize(formats::read_model(p));
+         formats::summary_text(summary);
+         formats::summary_json(summary);
        }},
       scaled(25000));
 }
