@@ -2,8 +2,8 @@
 # box_compression scene on a generated 8 × 8 × 8 block and a short press of a small skin block with
 # a visual surface, and reads each results.xdmf with pvpython's XDMF reader (paraview_check.py),
 # which must log no error. Skipped when pvpython is not installed (the test's
-# SKIP_REGULAR_EXPRESSION matches the message below): Debian's `paraview` and `python3-paraview` provide it; scripts/install-deps does not install them
-# (they are large).
+# SKIP_REGULAR_EXPRESSION matches the message below): Debian's `paraview` and `python3-paraview`
+# provide it; scripts/install-deps does not install them (they are large).
 # Inputs: -DSIMULATE=... -DGENERATE=... -DSAMPLE=<sinew-sample-model> -DSCENES=<data/scenes>
 #         -DCHECK=<paraview_check.py> -DWORK=<dir> -DPVPYTHON=<pvpython or PVPYTHON-NOTFOUND>
 cmake_minimum_required(VERSION 3.20)

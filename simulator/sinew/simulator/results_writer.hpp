@@ -2,8 +2,8 @@
 // Simulation results: one HDF5 file (results.h5) that grows a frame at a time, and an XDMF 3 index
 // (results.xdmf) that ParaView and meshio open as a temporal collection of hexahedral grids, plus
 // one temporal collection of triangle grids per visual surface (also alone in
-// results_surface_<name>.xdmf, for meshio, which reads one collection per file). docs/results-format.md documents
-// every dataset.
+// results_surface_<name>.xdmf, for meshio, which reads one collection per file).
+// docs/results-format.md documents every dataset.
 //
 // Layout (F frames, N nodes, E elements, V vertices / T triangles of a surface):
 //   /mesh/rest_positions      F64 N × 3, m
@@ -22,8 +22,8 @@
 //                             displacement, von_mises, J, energy_density,
 //                             surfaces/<name>/positions, surfaces/<name>/displacement
 // Frame datasets are extendible along their first axis. After each frame the file is flushed
-// (H5Fflush) and the XDMF index rewritten atomically (temporary file + rename), so a run killed
-// between frames leaves a file and an index that agree on every frame written.
+// (H5Fflush) and the XDMF files rewritten atomically (temporary file + rename), so a run killed
+// between frames leaves a file and indexes that agree on every frame written.
 //
 // Surface vertices follow the volume through their embedding: x = X + Σa Na(ξ, η, ζ) ua with the
 // trilinear hex8 shape functions Na = (1+ξaξ)(1+ηaη)(1+ζaζ)/8 (physics-notes §1) at the stored
