@@ -263,6 +263,39 @@ TEST(Hdf5File, DamagedGlobalHeapIsAFormatError) {
   }
 }
 
+// A file in the earliest format (version 1 object headers, no checksums: sinew's files before the
+// 1.8+ format, other tools' by default): a damaged heap reference of a variable-length attribute,
+// which HDF5 would follow into a crash, is found in the header and refused.
+TEST(Hdf5File, DamagedAttributeReferenceInAnOldFormatHeader) {
+  const auto path = temp_path("old.h5");
+  {
+    Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    ASSERT_TRUE(f.valid());
+    set_attribute(f, "label", std::string("utf-8 é"), path, StringKind::variable);
+  }
+  const auto good = file_bytes(path);
+  ASSERT_EQ(good.find("OHDR"), std::string::npos) << "not the earliest format";
+  const auto heap = good.find("GCOL");
+  ASSERT_NE(heap, std::string::npos);
+  // The reference: length 8 (the UTF-8 bytes of "utf-8 é"), the collection's address, the index.
+  std::string reference("\x08\0\0\0", 4);
+  for (int k = 0; k < 8; ++k) reference += static_cast<char>((heap >> (8 * k)) & 0xff);
+  const auto at = good.find(reference);
+  ASSERT_NE(at, std::string::npos);
+  {
+    auto f = open_checked(path);
+    EXPECT_EQ(string_attribute(f, "label", path), "utf-8 é");
+  }
+  auto b = good;
+  b[at + 12] = static_cast<char>(0x39);  // object 0x39 does not exist
+  const auto damaged = temp_path("damaged.h5");
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+      .write(b.data(), static_cast<std::streamsize>(b.size()));
+  auto f = open_checked(damaged);
+  EXPECT_CONTAINS(error_of<FormatError>([&] { string_attribute(f, "label", damaged); }),
+                  damaged + ": /label: its heap reference (collection");
+}
+
 // Files are written in the 1.8+ format, whose object headers carry checksums: a flipped byte in
 // the root group's header is refused instead of followed.
 TEST(Hdf5File, ObjectHeadersAreChecksummed) {

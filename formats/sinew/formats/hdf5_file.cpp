@@ -597,7 +597,7 @@ std::string string_attribute(hid_t obj, const std::string& name, const std::stri
   Handle a = open_attribute(obj, name, file, H5T_STRING, "string");
   Handle t(H5Aget_type(a), H5Tclose);
   if (H5Tis_variable_str(t) > 0) {
-    check_global_heaps(obj, file, attribute_path(obj, name));  // as for string datasets
+    check_global_heaps(obj, file, attribute_path(obj, name), name);  // as for string datasets
     Handle mem = utf8_string_type();
     char* value = nullptr;
     if (H5Aread(a, mem, &value) < 0) {

@@ -157,8 +157,94 @@ void check_vlen_dataset(hid_t dataset, const std::string& file, const std::strin
   }
 }
 
-void check_global_heaps(hid_t obj, const std::string& file, const std::string& where) {
+namespace {
+
+// The object header address of `obj`.
+std::optional<std::uint64_t> header_address(hid_t obj) {
+#if H5_VERSION_GE(1, 12, 0)
+  H5O_info2_t info;
+  haddr_t addr = HADDR_UNDEF;
+  if (H5Oget_info3(obj, &info, H5O_INFO_BASIC) < 0 ||
+      H5VLnative_token_to_addr(obj, info.token, &addr) < 0) {
+    return std::nullopt;
+  }
+#else
+  H5O_info_t info;
+  if (H5Oget_info2(obj, &info, H5O_INFO_BASIC) < 0) return std::nullopt;
+  const haddr_t addr = info.addr;
+#endif
+  if (addr == HADDR_UNDEF) return std::nullopt;
+  return addr;
+}
+
+// The 16-byte-or-so value of attribute `name` as stored in a version 1 object header (no
+// checksum), found by walking its messages and continuation blocks; nothing when the header is
+// version 2 (checksummed: HDF5 refuses a damaged one) or the attribute is not found there.
+std::optional<std::vector<unsigned char>> v1_attribute_value(RawFile& raw, std::uint64_t header,
+                                                             const std::string& name) {
+  const auto prefix = raw.bytes(raw.base() + header, 16);
+  if (!prefix || (*prefix)[0] != 1) return std::nullopt;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> blocks{
+      {raw.base() + header + 16, little_endian(prefix->data() + 8, 4)}};
+  for (std::size_t b = 0; b < blocks.size() && b < 64; ++b) {
+    const auto block = raw.bytes(blocks[b].first, blocks[b].second);
+    if (!block) return std::nullopt;
+    for (std::size_t p = 0; p + 8 <= block->size();) {
+      const unsigned char* m = block->data() + p;
+      const auto type = little_endian(m, 2);
+      const auto size = little_endian(m + 2, 2);
+      if (p + 8 + size > block->size()) return std::nullopt;
+      const unsigned char* d = m + 8;
+      if (type == 0x10 && size >= raw.addr_width() + raw.length_width()) {  // continuation
+        blocks.emplace_back(raw.base() + little_endian(d, raw.addr_width()),
+                            little_endian(d + raw.addr_width(), raw.length_width()));
+      } else if (type == 0x0C && size >= 8 && d[0] >= 1 && d[0] <= 3) {  // attribute
+        const auto version = d[0];
+        const auto name_size = little_endian(d + 2, 2);
+        const auto type_size = little_endian(d + 4, 2);
+        const auto space_size = little_endian(d + 6, 2);
+        const auto pad = [&](std::uint64_t n) { return version == 1 ? (n + 7) / 8 * 8 : n; };
+        const std::uint64_t start = 8 + (version == 3 ? 1 : 0);
+        const auto value = start + pad(name_size) + pad(type_size) + pad(space_size);
+        if (name_size == name.size() + 1 && start + name_size <= size &&
+            std::memcmp(d + start, name.c_str(), name.size() + 1) == 0) {
+          if (value > size) return std::nullopt;
+          return std::vector<unsigned char>(d + value, d + size);
+        }
+      }
+      p += 8 + size;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+void check_global_heaps(hid_t obj, const std::string& file, const std::string& where,
+                        const std::string& attribute) {
   RawFile raw(obj, file, where);
+  // In an unchecksummed header, the attribute's own heap reference: length, collection, index.
+  if (const auto header = header_address(obj)) {
+    const auto value = v1_attribute_value(raw, *header, attribute);
+    if (value && value->size() >= 4 + raw.addr_width() + 4) {
+      const auto length = little_endian(value->data(), 4);
+      const auto address = little_endian(value->data() + 4, raw.addr_width());
+      const auto index = little_endian(value->data() + 4 + raw.addr_width(), 4);
+      if (address != 0) {
+        const auto objects = collection_objects(raw, raw.base() + address);
+        bool found = false;
+        if (objects && index <= 0xffff) {
+          const auto object = objects->find(static_cast<std::uint16_t>(index));
+          found = object != objects->end() && object->second == length;
+        }
+        if (!found) {
+          throw raw.fail(
+              fmt::format("its heap reference (collection {}, object {}, {} bytes) is damaged",
+                          address, index, length));
+        }
+      }
+    }
+  }
   // Read in blocks that overlap by the signature's length, so none is missed at a block edge.
   constexpr std::uint64_t kBlock = 1 << 20;
   for (std::uint64_t at = 0; at < raw.size(); at += kBlock) {

@@ -22,9 +22,12 @@ namespace sinew::formats::hdf5 {
 // collection address, object index) must name an object of exactly that length in a well-formed
 // collection inside the file. FormatError otherwise.
 void check_vlen_dataset(hid_t dataset, const std::string& file, const std::string& name);
-// Before reading a variable-length string attribute, whose descriptor lies in an object header:
-// every global heap collection in the file (found by its signature) must be well-formed.
+// Before reading the variable-length string attribute `attribute` of `obj`, whose descriptor lies
+// in an object header: every global heap collection in the file (found by its signature) must be
+// well-formed, and, when the header is version 1 (no checksum; a version 2 header is checksummed
+// and HDF5 refuses a damaged one), the attribute's reference must name an object of its length.
 // FormatError otherwise, naming `where`.
-void check_global_heaps(hid_t obj, const std::string& file, const std::string& where);
+void check_global_heaps(hid_t obj, const std::string& file, const std::string& where,
+                        const std::string& attribute);
 
 }  // namespace sinew::formats::hdf5
