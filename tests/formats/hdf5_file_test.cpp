@@ -216,5 +216,103 @@ TEST(Hdf5File, BrokenFilesGiveTypedErrors) {
   }
 }
 
+// The global heap (variable-length strings) has no checksum and HDF5 follows it blindly (one
+// flipped byte of a model file once segfaulted H5HG_read): the readers check it first.
+TEST(Hdf5File, DamagedGlobalHeapIsAFormatError) {
+  const auto sample = write_sample();
+  const auto good = file_bytes(sample);
+  const auto heap = good.find("GCOL");
+  ASSERT_NE(heap, std::string::npos);
+  haddr_t names_at = HADDR_UNDEF;
+  {
+    auto f = open_checked(sample);
+    Handle ds(H5Dopen2(f, "/data/names", H5P_DEFAULT), H5Dclose);
+    names_at = H5Dget_offset(ds);
+  }
+  ASSERT_NE(names_at, HADDR_UNDEF);
+  const auto damaged = temp_path("damaged.h5");
+  const auto write_with = [&](std::size_t at, const std::string& bytes) {
+    auto b = good;
+    b.replace(at, bytes.size(), bytes);
+    std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+        .write(b.data(), static_cast<std::streamsize>(b.size()));
+  };
+  // The first object's size (after the 16-byte collection header: index, count, reserved, size).
+  write_with(heap + 16 + 8, std::string(8, '\xff'));
+  {
+    auto f = open_checked(damaged);
+    EXPECT_CONTAINS(error_of<FormatError>([&] { read_strings(f, "/data/names", damaged); }),
+                    damaged + ": /data/names: string 0: its global heap collection");
+    EXPECT_CONTAINS(error_of<FormatError>([&] { string_attribute(f, "label", damaged); }),
+                    "/label: the global heap collection at byte");
+  }
+  // The first string's object index (after its length and the collection's address).
+  write_with(static_cast<std::size_t>(names_at) + 4 + 8, std::string("\x39\x05\0\0", 4));
+  {
+    auto f = open_checked(damaged);
+    EXPECT_CONTAINS(error_of<FormatError>([&] { read_strings(f, "/data/names", damaged); }),
+                    "string 0: its heap reference (collection");
+    EXPECT_EQ(string_attribute(f, "label", damaged), "utf-8 é");  // its own reference is intact
+  }
+  // A length that disagrees with the object (HDF5 would copy the object into a shorter buffer).
+  write_with(static_cast<std::size_t>(names_at), std::string("\x02\0\0\0", 4));
+  {
+    auto f = open_checked(damaged);
+    EXPECT_CONTAINS(error_of<FormatError>([&] { read_strings(f, "/data/names", damaged); }),
+                    "string 0: its heap reference");
+  }
+}
+
+// A file in the earliest format (version 1 object headers, no checksums: sinew's files before the
+// 1.8+ format, other tools' by default): a damaged heap reference of a variable-length attribute,
+// which HDF5 would follow into a crash, is found in the header and refused.
+TEST(Hdf5File, DamagedAttributeReferenceInAnOldFormatHeader) {
+  const auto path = temp_path("old.h5");
+  {
+    Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    ASSERT_TRUE(f.valid());
+    set_attribute(f, "label", std::string("utf-8 é"), path, StringKind::variable);
+  }
+  const auto good = file_bytes(path);
+  ASSERT_EQ(good.find("OHDR"), std::string::npos) << "not the earliest format";
+  const auto heap = good.find("GCOL");
+  ASSERT_NE(heap, std::string::npos);
+  // The reference: length 8 (the UTF-8 bytes of "utf-8 é"), the collection's address, the index.
+  std::string reference("\x08\0\0\0", 4);
+  for (int k = 0; k < 8; ++k) reference += static_cast<char>((heap >> (8 * k)) & 0xff);
+  const auto at = good.find(reference);
+  ASSERT_NE(at, std::string::npos);
+  {
+    auto f = open_checked(path);
+    EXPECT_EQ(string_attribute(f, "label", path), "utf-8 é");
+  }
+  auto b = good;
+  b[at + 12] = static_cast<char>(0x39);  // object 0x39 does not exist
+  const auto damaged = temp_path("damaged.h5");
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+      .write(b.data(), static_cast<std::streamsize>(b.size()));
+  auto f = open_checked(damaged);
+  EXPECT_CONTAINS(error_of<FormatError>([&] { string_attribute(f, "label", damaged); }),
+                  damaged + ": /label: its heap reference (collection");
+}
+
+// Files are written in the 1.8+ format, whose object headers carry checksums: a flipped byte in
+// the root group's header is refused instead of followed.
+TEST(Hdf5File, ObjectHeadersAreChecksummed) {
+  const auto good = file_bytes(write_sample());
+  const auto header = good.find("OHDR");
+  ASSERT_NE(header, std::string::npos) << "no version 2 object header: not the 1.8+ format";
+  auto b = good;
+  b[header + 20] = static_cast<char>(b[header + 20] ^ 0x10);
+  const auto damaged = temp_path("damaged.h5");
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+      .write(b.data(), static_cast<std::streamsize>(b.size()));
+  const auto message = error_of<FormatError>([&] {
+    auto f = open_checked(damaged);
+    (void)string_attribute(f, "format", damaged);
+  });
+  EXPECT_CONTAINS(message, damaged);
+}
+
 }  // namespace
 }  // namespace sinew::formats::hdf5

@@ -82,5 +82,13 @@ TEST(Summary, JsonCarriesTheSameNumbers) {
   EXPECT_NEAR(j["bounding_box"]["max"][2].get<double>(), 0.008, 1e-15);
 }
 
+// A name that is not UTF-8 (bytes from a damaged file) prints as U+FFFD, not as JSON's exception.
+TEST(Summary, JsonOfANameThatIsNotUtf8) {
+  auto model = testing::every_feature_model();
+  model.muscles[1].name = "bad\xff";
+  const auto j = nlohmann::json::parse(summary_json(summarize(model)));
+  EXPECT_EQ(j["muscles"][1]["name"], "bad\xef\xbf\xbd");
+}
+
 }  // namespace
 }  // namespace sinew::formats

@@ -423,6 +423,57 @@ TEST(ResultsWriter, ResumeDropsFramesAfterTheCheckpoint) {
   EXPECT_THROW(ResultsWriter::resume(dir.str(), model, fewer, 15), FormatError);
 }
 
+TEST(ResultsWriter, FrameViewsShowOneFrameEachAndFollowAResume) {
+  // /frame_views/<f>/... are virtual datasets of frame f (what the XDMF files name, for meshio);
+  // after a resume they show the new frames written at the dropped frames' indices.
+  TempDir dir("results_views");
+  const auto model = small_box(false, true);
+  const auto& skin = model.surfaces[0];
+  {
+    ResultsWriter w(dir.str(), model, all_fields());
+    for (int f = 0; f < 3; ++f)
+      w.append_frame(0.1 * f, 10 * f, linear_field(model, f), fields_for(model, f));
+    const auto docs = w.xdmf_documents();
+    ASSERT_EQ(docs.size(), 2u);
+    EXPECT_EQ(docs[0].first, w.xdmf_path());
+    EXPECT_EQ(docs[1].first, dir / "results_surface_skin.xdmf");
+    EXPECT_NE(docs[1].second.find("/frame_views/2/surfaces/skin/displacement"), std::string::npos);
+    EXPECT_EQ(docs[1].second.find("volume"), std::string::npos);
+    // meshio reads the last temporal collection of results.xdmf: the volume's.
+    EXPECT_GT(docs[0].second.rfind("Name=\"volume\""), docs[0].second.rfind("surface_skin"));
+  }
+  {
+    auto w = ResultsWriter::resume(dir.str(), model, all_fields(), 15);
+    w->append_frame(0.17, 17, linear_field(model, 7), fields_for(model, 7));
+  }
+  const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  EXPECT_EQ(read_all<double>(file, "/frame_views/1/displacement", H5T_NATIVE_DOUBLE),
+            linear_field(model, 1));
+  EXPECT_EQ(read_all<double>(file, "/frame_views/2/displacement", H5T_NATIVE_DOUBLE),
+            linear_field(model, 7));
+  EXPECT_EQ(read_all<double>(file, "/frame_views/2/von_mises", H5T_NATIVE_DOUBLE),
+            fields_for(model, 7).von_mises);
+  // Frame 3 was dropped and not written again: its view is left, and no index names it.
+  EXPECT_EQ(read_file(dir / "results.xdmf").find("/frame_views/3/"), std::string::npos);
+  const auto positions = read_all<double>(file, "/surfaces/skin/positions", H5T_NATIVE_DOUBLE);
+  const auto shown =
+      read_all<double>(file, "/frame_views/2/surfaces/skin/positions", H5T_NATIVE_DOUBLE);
+  const auto moved =
+      read_all<double>(file, "/frame_views/2/surfaces/skin/displacement", H5T_NATIVE_DOUBLE);
+  ASSERT_EQ(shown.size(), 12u);
+  ASSERT_EQ(moved.size(), 12u);
+  for (std::size_t v = 0; v < 4; ++v) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(shown[3 * v + k], positions[2 * 12 + 3 * v + k]);
+      EXPECT_DOUBLE_EQ(moved[3 * v + k], shown[3 * v + k] - skin.vertices[v][k]);
+    }
+  }
+  H5Fclose(file);
+  const auto grids = check_xdmf(dir / "results_surface_skin.xdmf", dir / "results.h5");
+  EXPECT_EQ(grids.at("surface_skin"), 3);
+}
+
 // ---- probes ----
 
 std::vector<std::string> lines_of(const std::string& text) {

@@ -1,4 +1,5 @@
 #include "sinew/formats/hdf5_file.hpp"
+#include "sinew/formats/hdf5_heap_check.hpp"
 
 #include <fmt/format.h>
 
@@ -198,6 +199,7 @@ std::vector<std::string> read_string_values(hid_t ds, std::size_t n, const std::
   if (n == 0) return out;
   Handle type(H5Dget_type(ds), H5Tclose);
   if (H5Tis_variable_str(type) > 0) {
+    check_vlen_dataset(ds, file, name);  // the heap is unchecksummed; HDF5 would trust it
     Handle mem = utf8_string_type();
     std::vector<char*> ptrs(n, nullptr);
     if (H5Dread(ds, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0) {
@@ -309,7 +311,16 @@ bool is_hdf5(const std::string& path) {
 Handle create_file(const std::string& path, const std::string& display) {
   quiet_errors();
   Handle fcpl = untimed(H5P_FILE_CREATE);  // the root group: no time stamps
-  Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl, H5P_DEFAULT), H5Fclose);
+  // The 1.8 format as the lowest: superblock v2 and object headers v2, which carry checksums, with
+  // links and attributes in the headers or in checksummed fractal heaps and v2 B-trees; so a
+  // damaged metadata block is an error on read, not garbage that HDF5 follows (and may crash on).
+  // Not the 1.10 low bound: its superblock v3 records "open for writing" and refuses to open a
+  // file whose writer was killed, and results and checkpoints must stay readable after SIGKILL.
+  // The high bound keeps a newer library from writing what HDF5 1.10 (h5py on Debian, the GPU
+  // machine) cannot read; the frame views (VDS) need it.
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V110);
+  Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl, fapl), H5Fclose);
   if (!f.valid()) throw io_fail(display.empty() ? path : display, "", "cannot create the file");
   return f;
 }
@@ -547,6 +558,36 @@ void set_frames(hid_t dataset, hsize_t frames, const std::string& file, const st
   }
 }
 
+void create_frame_view(hid_t loc, const std::string& name, const std::string& source, hsize_t frame,
+                       const std::string& file) {
+  Handle src(H5Dopen2(loc, source.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!src.valid()) throw io_fail(file, source, "cannot open the dataset to view");
+  auto dims = dims_of(src, file, source);
+  if (dims.empty() || frame >= dims[0]) {
+    throw IoError(file, source, "a frame view past the dataset's last frame");
+  }
+  Handle type(H5Dget_type(src), H5Tclose);
+  std::vector<hsize_t> start(dims.size(), 0), count = dims;
+  start[0] = frame;
+  count[0] = 1;
+  // The source selection is frame `frame` of a space whose first axis is unlimited, so the view
+  // stays valid while the series grows; "." names the file the view is in.
+  std::vector<hsize_t> maxdims = dims;
+  maxdims[0] = H5S_UNLIMITED;
+  Handle src_space = simple_space(dims, maxdims.data());
+  H5Sselect_hyperslab(src_space, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr);
+  const std::vector<hsize_t> tail(dims.begin() + 1, dims.end());
+  Handle view_space = simple_space(tail);
+  Handle plist = untimed(H5P_DATASET_CREATE);
+  if (H5Pset_virtual(plist, view_space, ".", source.c_str(), src_space) < 0) {
+    throw io_fail(file, name, "cannot map the frame view");
+  }
+  Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+  H5Pset_create_intermediate_group(lcpl, 1);
+  Handle ds(H5Dcreate2(loc, name.c_str(), type, view_space, lcpl, plist, H5P_DEFAULT), H5Dclose);
+  if (!ds.valid()) throw io_fail(file, name, "cannot create the frame view");
+}
+
 // ---- Attributes -------------------------------------------------------------------------------
 
 void set_attribute(hid_t obj, const std::string& name, const std::string& value,
@@ -589,6 +630,7 @@ std::string string_attribute(hid_t obj, const std::string& name, const std::stri
   Handle a = open_attribute(obj, name, file, H5T_STRING, "string");
   Handle t(H5Aget_type(a), H5Tclose);
   if (H5Tis_variable_str(t) > 0) {
+    check_global_heaps(obj, file, attribute_path(obj, name), name);  // as for string datasets
     Handle mem = utf8_string_type();
     char* value = nullptr;
     if (H5Aread(a, mem, &value) < 0) {

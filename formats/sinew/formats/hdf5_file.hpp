@@ -139,6 +139,12 @@ void append(hid_t dataset, hsize_t frame, const T* data, const std::string& file
 // Shrinks or grows the first dimension to `frames`.
 void set_frames(hid_t dataset, hsize_t frames, const std::string& file, const std::string& name);
 
+// A virtual dataset (HDF5 VDS) `name` of shape (tail...) that shows frame `frame` of the series
+// `source` in the same file: no data of its own, so readers that take whole datasets only (meshio,
+// the XDMF index) can name one frame. Intermediate groups are created. IoError on failure.
+void create_frame_view(hid_t loc, const std::string& name, const std::string& source, hsize_t frame,
+                       const std::string& file);
+
 // ---- Attributes (one value each) -------------------------------------------------------------
 
 // String attributes are fixed-length NUL-padded by default; variable-length UTF-8 when asked

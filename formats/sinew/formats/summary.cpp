@@ -105,7 +105,9 @@ std::string summary_text(const ModelSummary& s) {
   for (const auto& in : p.inputs) line(fmt::format("  input {} sha256 {}", in.path, in.sha256));
   if (!p.parameters_json.empty()) {
     // One line of JSON whatever the stored formatting.
-    line("  parameters " + nlohmann::ordered_json::parse(p.parameters_json).dump());
+    line("  parameters " +
+         nlohmann::ordered_json::parse(p.parameters_json)
+             .dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace));
   }
   return out;
 }
@@ -161,7 +163,9 @@ std::string summary_json(const ModelSummary& s) {
       {"inputs", inputs},
       {"parameters",
        p.parameters_json.empty() ? ordered_json(nullptr) : ordered_json::parse(p.parameters_json)}};
-  return j.dump(2);
+  // Names are bytes from the file, not necessarily UTF-8 (the fuzz test found one): invalid bytes
+  // print as U+FFFD rather than throw JSON's untyped error.
+  return j.dump(2, ' ', false, ordered_json::error_handler_t::replace);
 }
 
 }  // namespace sinew::formats

@@ -43,13 +43,20 @@ std::vector<double> surface_positions(const formats::Model& model, const formats
 struct ResultsWriter::Impl {
   h5::Handle file;
   h5::Handle time, step, displacement, von_mises, jacobian, energy_density;
-  std::vector<h5::Handle> surfaces;  // positions per visual surface
+  std::vector<h5::Handle> surfaces;               // positions per visual surface
+  std::vector<h5::Handle> surface_displacements;  // displacement per visual surface
 };
 
 namespace {
 
 std::string surface_group(const formats::Surface& s) {
   return "/surfaces/" + s.name;
+}
+
+// The group of frame f's views (virtual datasets, one frame of each series): the XDMF index and
+// meshio name whole datasets only, so each frame's arrays need a name of their own.
+std::string view_group(std::size_t f) {
+  return "/frame_views/" + std::to_string(f);
 }
 
 // Surface names come from the model file; they must not break the index's XML.
@@ -144,6 +151,8 @@ ResultsWriter::ResultsWriter(const std::string& directory, const formats::Model&
       h5::write(f, g + "/triangles", {surf.triangles.size(), 3}, tri.data(), p);
       impl_->surfaces.push_back(
           h5::create_series<double>(f, g + "/positions", {surf.vertices.size(), 3}, p));
+      impl_->surface_displacements.push_back(
+          h5::create_series<double>(f, g + "/displacement", {surf.vertices.size(), 3}, p));
     }
   }
   h5::flush(f, p);
@@ -204,8 +213,10 @@ std::unique_ptr<ResultsWriter> ResultsWriter::resume(const std::string& director
   field(w->options_.stress, "/frames/von_mises", impl.von_mises);
   field(w->options_.jacobian, "/frames/J", impl.jacobian);
   field(w->options_.energy_density, "/frames/energy_density", impl.energy_density);
-  for (auto s : w->visual_)
+  for (auto s : w->visual_) {
     impl.surfaces.push_back(open(surface_group(model.surfaces[s]) + "/positions"));
+    impl.surface_displacements.push_back(open(surface_group(model.surfaces[s]) + "/displacement"));
+  }
   h5::flush(impl.file, p);
   w->write_index();
   return w;
@@ -240,8 +251,32 @@ void ResultsWriter::append_frame(double time, std::int64_t step, const std::vect
   }
   for (std::size_t i = 0; i < visual_.size(); ++i) {
     const auto& surf = model_.surfaces[visual_[i]];
-    const auto x = surface_positions(model_, surf, u);
+    auto x = surface_positions(model_, surf, u);
     h5::append(impl.surfaces[i], f, x.data(), p, surface_group(surf) + "/positions");
+    for (std::size_t v = 0; v < surf.vertices.size(); ++v) {
+      for (std::size_t k = 0; k < 3; ++k) x[3 * v + k] -= surf.vertices[v][k];
+    }
+    h5::append(impl.surface_displacements[i], f, x.data(), p,
+               surface_group(surf) + "/displacement");
+  }
+  const auto views = view_group(f);
+  // A view names a frame index, not its data: after a resume the views of dropped frames (a killed
+  // run may also have left some of a frame whose time it never wrote) show the new frame at their
+  // index, so they stay. Deleting them would make HDF5 follow the global heap their mappings are
+  // stored in, which no checksum covers (a damaged one hung H5Ldelete in the fuzz test).
+  const auto view = [&](bool on, const std::string& series, const std::string& name) {
+    if (on && !h5::exists(impl.file, views + "/" + name)) {
+      h5::create_frame_view(impl.file, views + "/" + name, series, f, p);
+    }
+  };
+  view(true, "/frames/displacement", "displacement");
+  view(options_.stress, "/frames/von_mises", "von_mises");
+  view(options_.jacobian, "/frames/J", "J");
+  view(options_.energy_density, "/frames/energy_density", "energy_density");
+  for (auto s : visual_) {
+    const auto g = surface_group(model_.surfaces[s]);
+    view(true, g + "/positions", g.substr(1) + "/positions");
+    view(true, g + "/displacement", g.substr(1) + "/displacement");
   }
   // time and step last: a reader that sees the frame's time sees all of its data.
   h5::append(impl.step, f, &step, p, "/frames/step");
@@ -251,106 +286,148 @@ void ResultsWriter::append_frame(double time, std::int64_t step, const std::vect
   write_index();
 }
 
-std::string ResultsWriter::xdmf_text() const {
-  const auto h5name = fs::path(h5_path_).filename().string();
-  const auto n = model_.node_count();
-  const auto e = model_.element_count();
-  const auto frames = times_.size();
-  std::ostringstream x;
-  x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n "
-       "<Domain>\n";
-  // Frame f of a (frames, tail...) dataset as an XDMF hyperslab: rows start, stride, count.
-  const auto slab = [&](std::size_t f, const std::string& dataset, std::vector<std::size_t> tail) {
-    std::vector<std::size_t> start{f}, stride{1}, count{1}, full{frames};
-    for (auto t : tail) {
-      start.push_back(0);
-      stride.push_back(1);
-      count.push_back(t);
-      full.push_back(t);
-    }
-    return fmt::format(
-        "<DataItem ItemType=\"HyperSlab\" Dimensions=\"{count}\" Type=\"HyperSlab\">\n"
-        "       <DataItem Dimensions=\"3 {rank}\" Format=\"XML\">{start} {stride} "
-        "{count}</DataItem>\n"
-        "       <DataItem Dimensions=\"{full}\" NumberType=\"Float\" Precision=\"8\" "
-        "Format=\"HDF\">{h5}:{ds}</DataItem>\n"
-        "      </DataItem>",
-        fmt::arg("count", fmt::join(count, " ")), fmt::arg("rank", count.size()),
-        fmt::arg("start", fmt::join(start, " ")), fmt::arg("stride", fmt::join(stride, " ")),
-        fmt::arg("full", fmt::join(full, " ")), fmt::arg("h5", h5name), fmt::arg("ds", dataset));
-  };
-  // The opening of frame f's grid (volume and surfaces alike): its name and time.
-  const auto frame_grid = [&](const std::string& name, std::size_t f) {
-    x << fmt::format("   <Grid Name=\"{}_{}\" GridType=\"Uniform\">\n", name, f);
-    x << fmt::format("    <Time Value=\"{:.17g}\"/>\n", times_[f]);
-  };
-  x << "  <Grid Name=\"volume\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  for (std::size_t f = 0; f < frames; ++f) {
-    frame_grid("volume", f);
-    x << fmt::format(
-        "    <Topology TopologyType=\"Hexahedron\" NumberOfElements=\"{e}\">\n"
-        "     <DataItem Dimensions=\"{e} 8\" NumberType=\"Int\" Precision=\"4\" "
-        "Format=\"HDF\">{h5}:/mesh/connectivity</DataItem>\n"
-        "    </Topology>\n"
-        "    <Geometry GeometryType=\"XYZ\">\n"
-        "     <DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" "
-        "Format=\"HDF\">{h5}:/mesh/rest_positions</DataItem>\n"
-        "    </Geometry>\n"
-        "    <Attribute Name=\"material\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-        "     <DataItem Dimensions=\"{e}\" NumberType=\"Int\" Precision=\"4\" "
-        "Format=\"HDF\">{h5}:/mesh/material</DataItem>\n"
-        "    </Attribute>\n",
-        fmt::arg("e", e), fmt::arg("n", n), fmt::arg("h5", h5name));
-    x << "    <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n      "
-      << slab(f, "/frames/displacement", {n, 3}) << "\n    </Attribute>\n";
-    const auto cell = [&](bool on, const char* name, const char* ds) {
-      if (!on) return;
-      x << fmt::format(
-               "    <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Cell\">\n      ", name)
-        << slab(f, ds, {e}) << "\n    </Attribute>\n";
+namespace {
+
+// One temporal collection grid of an XDMF 3 document as meshio's TimeSeriesReader and ParaView's
+// readers both take it: every DataItem names a whole dataset (meshio reads no hyperslabs), frame
+// f's arrays being the views under /frame_views/f.
+struct XdmfGrid {
+  std::string name;
+  std::string topology;  // the Topology element, with its DataItem
+  // Per frame: the Geometry element and the attributes, the frame's group is substituted for {v}.
+  std::string geometry;
+  std::string attributes;
+};
+
+std::string data_item(const std::string& h5, const std::string& dataset, const std::string& dims,
+                      const char* type, int precision) {
+  return fmt::format(
+      "<DataItem Dimensions=\"{}\" NumberType=\"{}\" Precision=\"{}\" "
+      "Format=\"HDF\">{}:{}</DataItem>",
+      dims, type, precision, h5, xml_escape(dataset));
+}
+
+std::string attribute(const char* name, const char* type, const char* center,
+                      const std::string& item) {
+  return fmt::format(
+      "    <Attribute Name=\"{}\" AttributeType=\"{}\" Center=\"{}\">\n     {}\n"
+      "    </Attribute>\n",
+      name, type, center, item);
+}
+
+void write_grid(std::ostringstream& x, const XdmfGrid& g, const std::vector<double>& times) {
+  x << fmt::format("  <Grid Name=\"{}\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+                   xml_escape(g.name));
+  for (std::size_t f = 0; f < times.size(); ++f) {
+    const auto views = view_group(f);
+    const auto frame = [&](const std::string& text) {
+      return fmt::format(fmt::runtime(text), fmt::arg("v", xml_escape(views)));
     };
-    cell(options_.stress, "von_mises", "/frames/von_mises");
-    cell(options_.jacobian, "J", "/frames/J");
-    cell(options_.energy_density, "energy_density", "/frames/energy_density");
-    x << "   </Grid>\n";
+    x << fmt::format("   <Grid Name=\"{}_{}\" GridType=\"Uniform\">\n", xml_escape(g.name), f)
+      << fmt::format("    <Time Value=\"{:.17g}\"/>\n", times[f]) << g.topology << frame(g.geometry)
+      << frame(g.attributes) << "   </Grid>\n";
   }
   x << "  </Grid>\n";
-  for (auto s : visual_) {
-    const auto& surf = model_.surfaces[s];
-    const auto g = surface_group(surf);
-    x << fmt::format(
-        "  <Grid Name=\"surface_{}\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
-        xml_escape(surf.name));
-    for (std::size_t f = 0; f < frames; ++f) {
-      frame_grid("surface_" + xml_escape(surf.name), f);
-      x << fmt::format(
-          "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"{t}\">\n"
-          "     <DataItem Dimensions=\"{t} 3\" NumberType=\"Int\" Precision=\"4\" "
-          "Format=\"HDF\">{h5}:{g}/triangles</DataItem>\n"
-          "    </Topology>\n"
-          "    <Geometry GeometryType=\"XYZ\">\n      ",
-          fmt::arg("t", surf.triangles.size()), fmt::arg("h5", h5name), fmt::arg("g", g));
-      x << slab(f, g + "/positions", {surf.vertices.size(), 3})
-        << "\n    </Geometry>\n   </Grid>\n";
-    }
-    x << "  </Grid>\n";
+}
+
+// Escapes fmt's braces in text that goes through write_grid's per-frame substitution.
+std::string fmt_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    out += c;
+    if (c == '{' || c == '}') out += c;
   }
+  return out;
+}
+
+std::string xdmf_document(const std::vector<XdmfGrid>& grids, const std::vector<double>& times) {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n";
+  for (const auto& g : grids) write_grid(x, g, times);
   x << " </Domain>\n</Xdmf>\n";
   return x.str();
 }
 
-void ResultsWriter::write_index() const {
-  const auto tmp = xdmf_path_ + ".tmp-" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError(tmp, "", "cannot create the XDMF index");
-    out << xdmf_text();
-    out.flush();
-    if (!out) throw IoError(tmp, "", "cannot write the XDMF index");
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> ResultsWriter::xdmf_documents() const {
+  const auto h5 = fs::path(h5_path_).filename().string();  // "results.h5": no braces, no XML
+  const auto n = model_.node_count();
+  const auto e = model_.element_count();
+  XdmfGrid volume{"volume", "", "", ""};
+  volume.topology = fmt::format(
+      "    <Topology TopologyType=\"Hexahedron\" NumberOfElements=\"{}\">\n     {}\n"
+      "    </Topology>\n",
+      e, data_item(h5, "/mesh/connectivity", fmt::format("{} 8", e), "Int", 4));
+  volume.geometry = fmt_escape(
+      fmt::format("    <Geometry GeometryType=\"XYZ\">\n     {}\n    </Geometry>\n",
+                  data_item(h5, "/mesh/rest_positions", fmt::format("{} 3", n), "Float", 8)));
+  volume.attributes =
+      fmt_escape(attribute("material", "Scalar", "Cell",
+                           data_item(h5, "/mesh/material", std::to_string(e), "Int", 4))) +
+      attribute("displacement", "Vector", "Node",
+                data_item(h5, "{v}/displacement", fmt::format("{} 3", n), "Float", 8));
+  const auto cell = [&](bool on, const char* name) {
+    if (on) {
+      volume.attributes +=
+          attribute(name, "Scalar", "Cell",
+                    data_item(h5, fmt::format("{{v}}/{}", name), std::to_string(e), "Float", 8));
+    }
+  };
+  cell(options_.stress, "von_mises");
+  cell(options_.jacobian, "J");
+  cell(options_.energy_density, "energy_density");
+
+  std::vector<std::pair<std::string, std::string>> docs;
+  std::vector<XdmfGrid> all;
+  for (auto s : visual_) {
+    const auto& surf = model_.surfaces[s];
+    const auto g = fmt_escape(surface_group(surf).substr(1));
+    const auto v = fmt::format("{} 3", surf.vertices.size());
+    XdmfGrid grid{"surface_" + surf.name, "", "", ""};
+    grid.topology = fmt::format(
+        "    <Topology TopologyType=\"Triangle\" NumberOfElements=\"{}\">\n     {}\n"
+        "    </Topology>\n",
+        surf.triangles.size(),
+        data_item(h5, surface_group(surf) + "/triangles",
+                  fmt::format("{} 3", surf.triangles.size()), "Int", 4));
+    grid.geometry = "    <Geometry GeometryType=\"XYZ\">\n     " +
+                    data_item(h5, "{v}/" + g + "/positions", v, "Float", 8) + "\n    </Geometry>\n";
+    grid.attributes = attribute("displacement", "Vector", "Node",
+                                data_item(h5, "{v}/" + g + "/displacement", v, "Float", 8));
+    docs.emplace_back(
+        (fs::path(xdmf_path_).parent_path() / ("results_surface_" + surf.name + ".xdmf")).string(),
+        xdmf_document({grid}, times_));
+    all.push_back(std::move(grid));
   }
-  if (std::rename(tmp.c_str(), xdmf_path_.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw IoError(xdmf_path_, "", "cannot rename the XDMF index into place");
+  // The volume last: meshio's TimeSeriesReader reads the last temporal collection of a document.
+  all.push_back(std::move(volume));
+  docs.emplace(docs.begin(), xdmf_path_, xdmf_document(all, times_));
+  return docs;
+}
+
+std::string ResultsWriter::xdmf_text() const {
+  return xdmf_documents().front().second;
+}
+
+void ResultsWriter::write_index() const {
+  for (const auto& [path, text] : xdmf_documents()) {
+    const auto tmp = path + ".tmp-" + std::to_string(::getpid());
+    {
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      if (!out) throw IoError(tmp, "", "cannot create the XDMF index");
+      out << text;
+      out.flush();
+      if (!out) {
+        out.close();
+        std::remove(tmp.c_str());
+        throw IoError(tmp, "", "cannot write the XDMF index");
+      }
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+      std::remove(tmp.c_str());
+      throw IoError(path, "", "cannot rename the XDMF index into place");
+    }
   }
 }
 

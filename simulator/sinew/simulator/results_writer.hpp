@@ -1,8 +1,9 @@
 #pragma once
-// Simulation results: one HDF5 file (results.h5) that grows a frame at a time, and an XDMF index
-// (results.xdmf) that ParaView opens as a temporal collection of hexahedral grids, plus one
-// temporal collection of triangle grids per visual surface. docs/results-format.md documents
-// every dataset.
+// Simulation results: one HDF5 file (results.h5) that grows a frame at a time, and an XDMF 3 index
+// (results.xdmf) that ParaView and meshio open as a temporal collection of hexahedral grids, plus
+// one temporal collection of triangle grids per visual surface (also alone in
+// results_surface_<name>.xdmf, for meshio, which reads one collection per file).
+// docs/results-format.md documents every dataset.
 //
 // Layout (F frames, N nodes, E elements, V vertices / T triangles of a surface):
 //   /mesh/rest_positions      F64 N × 3, m
@@ -16,9 +17,13 @@
 //   /frames/energy_density    F64 F × E, J/m³         (field "energy_density")
 //   /surfaces/<name>/triangles  I32 T × 3
 //   /surfaces/<name>/positions  F64 F × V × 3, m      (field "surfaces")
+//   /surfaces/<name>/displacement  F64 F × V × 3, m   (positions − rest vertex positions)
+//   /frame_views/<f>/...      virtual datasets (HDF5 VDS), frame f of each series above:
+//                             displacement, von_mises, J, energy_density,
+//                             surfaces/<name>/positions, surfaces/<name>/displacement
 // Frame datasets are extendible along their first axis. After each frame the file is flushed
-// (H5Fflush) and the XDMF index rewritten atomically (temporary file + rename), so a run killed
-// between frames leaves a file and an index that agree on every frame written.
+// (H5Fflush) and the XDMF files rewritten atomically (temporary file + rename), so a run killed
+// between frames leaves a file and indexes that agree on every frame written.
 //
 // Surface vertices follow the volume through their embedding: x = X + Σa Na(ξ, η, ζ) ua with the
 // trilinear hex8 shape functions Na = (1+ξaξ)(1+ηaη)(1+ζaζ)/8 (physics-notes §1) at the stored
@@ -26,10 +31,11 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "sinew/formats/results_format.hpp"
 #include "sinew/formats/model.hpp"
+#include "sinew/formats/results_format.hpp"
 #include "sinew/simulator/engine.hpp"
 
 namespace sinew::simulator {
@@ -74,8 +80,12 @@ class ResultsWriter {
   const std::vector<double>& times() const { return times_; }
   const std::string& h5_path() const { return h5_path_; }
   const std::string& xdmf_path() const { return xdmf_path_; }
-  // The XDMF document for the frames written so far.
+  // The XDMF document (results.xdmf) for the frames written so far.
   std::string xdmf_text() const;
+  // Every XDMF document for the frames written so far, (path, text): results.xdmf first (the
+  // surfaces' collections, then the volume's), then results_surface_<name>.xdmf per visual
+  // surface (its collection alone, for readers that take one collection per file, like meshio).
+  std::vector<std::pair<std::string, std::string>> xdmf_documents() const;
 
  private:
   struct Resume {};
