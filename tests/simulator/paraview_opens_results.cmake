@@ -17,19 +17,11 @@ include("${CMAKE_CURRENT_LIST_DIR}/results_runs.cmake")
 # reader log "Cannot find DataItem element in geometry xml" on every read).
 foreach(run "out;31;729;512" "skin_out;5;2696;2816")
   list(GET run 0 dir)
-  list(GET run 1 frames)
-  list(GET run 2 points)
-  list(GET run 3 cells)
-  execute_process(COMMAND "${PVPYTHON}" --force-offscreen-rendering "${CHECK}"
-                          "${WORK}/${dir}/results.xdmf" ${frames} ${points} ${cells}
-                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message("${out}")
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "FAILED: pvpython exited ${rc} on ${dir}: ${out} ${err}")
-  endif()
+  list(SUBLIST run 1 3 counts)
+  check_results(${dir} COMMAND "${PVPYTHON}" --force-offscreen-rendering "${CHECK}" ARGS ${counts})
   # No error or warning lines from the reader (ParaView logs them, "ERR| ... Cannot find DataItem
   # element in geometry xml" once, and reads on).
-  if("${out}${err}" MATCHES "ERR\\||ERROR|Warning|Cannot find DataItem")
-    message(FATAL_ERROR "FAILED: ParaView logged errors reading ${dir}/results.xdmf: ${err}")
+  if(check_output MATCHES "ERR\\||ERROR|Warning|Cannot find DataItem")
+    message(FATAL_ERROR "FAILED: ParaView logged errors reading ${dir}/results.xdmf: ${check_output}")
   endif()
 endforeach()

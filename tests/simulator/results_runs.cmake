@@ -26,3 +26,16 @@ foreach(run "box_compression.yaml;out" "skin_press.yaml;skin_out")
     message(FATAL_ERROR "FAILED: sinew-simulate ${scene_file} exited ${rc}: ${err}")
   endif()
 endforeach()
+
+# Runs a reader's check on one run's results: COMMAND <results.xdmf of WORK/dir> ARGS; fails the test
+# when it exits non-zero, and leaves its stdout and stderr in check_output.
+function(check_results dir)
+  cmake_parse_arguments(R "" "" "COMMAND;ARGS" ${ARGN})
+  execute_process(COMMAND ${R_COMMAND} "${WORK}/${dir}/results.xdmf" ${R_ARGS}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message("${out}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "FAILED: ${R_COMMAND} exited ${rc} on ${dir}: ${out} ${err}")
+  endif()
+  set(check_output "${out}${err}" PARENT_SCOPE)
+endfunction()
