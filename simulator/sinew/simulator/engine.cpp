@@ -6,9 +6,6 @@
 #include <cmath>
 #include <limits>
 
-#include <fmt/format.h>
-
-#include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/common/math.hpp"
 #include "sinew/simulator/backend_core.hpp"
@@ -62,6 +59,13 @@ class CpuEngine final : public Backend {
   State state() const override;
   void restore(const State& s) override;
   std::vector<double> displacements() const override { return flatten(u_.data(), n_); }
+  std::vector<double> displacements(const std::vector<Index>& nodes) const override {
+    core_.check_node_ids(nodes, "nodes");
+    std::vector<Vec3<T>> picked;
+    picked.reserve(nodes.size());
+    for (auto n : nodes) picked.push_back(u_[std::size_t(n)]);
+    return flatten(picked.data(), picked.size());
+  }
   std::vector<double> velocities() const override {
     return core_.velocities(u_.data(), up_.data());
   }
@@ -354,19 +358,6 @@ void CpuEngine<T>::restore(const State& s) {
 }
 
 }  // namespace
-
-std::vector<double> Backend::displacements(const std::vector<Index>& nodes) const {
-  const std::vector<double> u = displacements();
-  std::vector<double> out;
-  out.reserve(3 * nodes.size());
-  for (auto n : nodes) {
-    if (n < 0 || 3 * std::size_t(n) >= u.size())
-      throw ConfigError("", "nodes",
-                        fmt::format("node id {} out of range [0, {})", n, u.size() / 3));
-    out.insert(out.end(), u.begin() + 3 * std::ptrdiff_t(n), u.begin() + 3 * std::ptrdiff_t(n) + 3);
-  }
-  return out;
-}
 
 std::unique_ptr<Backend> make_cpu_backend(const formats::Model& model, const Setup& setup) {
   Plan plan = make_plan(model, setup);

@@ -69,7 +69,7 @@ class Backend {
   virtual std::vector<double> displacements() const = 0;  // N × 3, m, u(n)
   // u(n) of the listed nodes only, 3 per node in list order, m (probes: the CUDA backend gathers
   // them on the device and copies only these). Throws ConfigError for an id out of range.
-  virtual std::vector<double> displacements(const std::vector<Index>& nodes) const;
+  virtual std::vector<double> displacements(const std::vector<Index>& nodes) const = 0;
   virtual std::vector<double> velocities() const = 0;  // N × 3, m/s, (u(n) − u(n−1))/Δt
   // Internal nodal forces f at u(n), N × 3, N (computed on demand).
   virtual std::vector<double> internal_forces() = 0;

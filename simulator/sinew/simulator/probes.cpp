@@ -68,9 +68,9 @@ ProbeWriter::~ProbeWriter() {
   for (auto* f : files_) std::fclose(f);
 }
 
-std::vector<Index> ProbeWriter::displacement_nodes() const {
+std::vector<Index> displacement_probe_nodes(const std::vector<ResolvedProbe>& probes) {
   std::vector<Index> nodes;
-  for (const auto& p : probes_)
+  for (const auto& p : probes)
     if (p.kind != SceneProbe::Kind::reaction) nodes.push_back(p.nodes.front());
   return nodes;
 }

@@ -17,6 +17,10 @@
 
 namespace sinew::simulator {
 
+// The node of each displacement probe, in probe order: what a probe row reads of u
+// (Backend::displacements(nodes)).
+std::vector<Index> displacement_probe_nodes(const std::vector<ResolvedProbe>& probes);
+
 class ProbeWriter {
  public:
   using Reaction = std::function<std::array<double, 3>(const std::vector<Index>& nodes)>;
@@ -39,8 +43,7 @@ class ProbeWriter {
   // (Backend::displacements(nodes): a device copies only these).
   void record_probed(double time, std::int64_t step, const std::vector<double>& probed_u,
                      const Reaction& reaction);
-  // The node of each displacement probe, in probe order.
-  std::vector<Index> displacement_nodes() const;
+  std::vector<Index> displacement_nodes() const { return displacement_probe_nodes(probes_); }
 
   bool empty() const { return probes_.empty(); }
   // The CSV path of probe i.

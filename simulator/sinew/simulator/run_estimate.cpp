@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
+#include "sinew/simulator/probes.hpp"
 
 namespace sinew::simulator {
 namespace {
@@ -20,17 +21,14 @@ double seconds_of(F&& f) {
 
 }  // namespace
 
-RunEstimate estimate_run(Backend& backend, const ResolvedScene& resolved, double duration,
-                         bool fields) {
+RunEstimate estimate_run(Backend& backend, const ResolvedScene& resolved,
+                         const OutputCounts& counts, bool fields) {
   RunEstimate e;
   const Plan& plan = backend.plan();
-  e.frames = resolved.output_interval > 0
-                 ? std::int64_t(std::floor(duration / resolved.output_interval)) + 2
-                 : 2;
-  e.rows = resolved.probes.empty() ? 0
-           : resolved.probe_interval > 0
-               ? std::int64_t(std::floor(duration / resolved.probe_interval)) + 2
-               : plan.steps + 1;
+  e.frames = counts.frames;
+  e.rows = counts.probe_rows;
+  // A probe row as the runner writes it: the probed nodes' displacements, each reaction set.
+  const std::vector<Index> probed = displacement_probe_nodes(resolved.probes);
   // Two calls of the backend's preferred length: the first warms up (first graph launches,
   // caches, lists), the second is timed.
   const std::int64_t half =
@@ -47,12 +45,11 @@ RunEstimate estimate_run(Backend& backend, const ResolvedScene& resolved, double
     });
     if (!resolved.probes.empty())
       e.row_s = seconds_of([&] {
-        backend.displacements();
+        backend.displacements(probed);
         for (const auto& p : resolved.probes)
           if (p.kind == SceneProbe::Kind::reaction) backend.reaction(p.nodes);
       });
-    e.total_s =
-        double(plan.steps) * e.step_s + double(e.frames) * e.frame_s + double(e.rows) * e.row_s;
+    e.total_s = double(plan.steps) * e.step_s + e.frames * e.frame_s + e.rows * e.row_s;
   } catch (const InstabilityError& ex) {
     e.failure = ex.what();
   }
@@ -64,8 +61,8 @@ std::string describe(const RunEstimate& e) {
   if (!e.failure.empty())
     return fmt::format("Estimated wall time: none, the warm-up went unstable: {}\n", e.failure);
   return fmt::format(
-      "Estimated wall time: {:.3g} s (steps {:.3g} ms each, measured over {} warm-up steps; {} "
-      "frames at {:.3g} ms; {} probe rows at {:.3g} ms; file writing not included)\n",
+      "Estimated wall time: {:.3g} s (steps {:.3g} ms each, measured over {} warm-up steps; {:.0f} "
+      "frames at {:.3g} ms; {:.0f} rows per probe at {:.3g} ms; file writing not included)\n",
       e.total_s, e.step_s * 1e3, e.warmup_steps, e.frames, e.frame_s * 1e3, e.rows, e.row_s * 1e3);
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/run_limits.hpp"
 #include "sinew/simulator/scene.hpp"
 
 namespace sinew::simulator {
@@ -16,15 +17,16 @@ struct RunEstimate {
   std::int64_t warmup_steps = 0;
   double step_s = 0;              // s of wall time per step (the warm-up's second half)
   double frame_s = 0, row_s = 0;  // s per frame (displacements, fields, energies), per probe row
-  std::int64_t frames = 0, rows = 0;  // how many the run writes
+  double frames = 0, rows = 0;    // how many the run writes (count_outputs: rows per probe file)
   double total_s = 0;
   std::string failure;  // the warm-up's instability message, when it failed (no estimate)
 };
 
-// `duration`: scene time; `fields`: whether frames carry element fields. The backend is back at
-// its starting state on return, also when the warm-up failed.
-RunEstimate estimate_run(Backend& backend, const ResolvedScene& resolved, double duration,
-                         bool fields);
+// `counts`: the run's frames and probe rows (count_outputs); `fields`: whether frames carry
+// element fields. The backend is back at its starting state on return, also when the warm-up
+// failed.
+RunEstimate estimate_run(Backend& backend, const ResolvedScene& resolved,
+                         const OutputCounts& counts, bool fields);
 // One line for the plan: "Estimated wall time: ..." (or why there is none).
 std::string describe(const RunEstimate& e);
 

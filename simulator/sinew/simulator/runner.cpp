@@ -252,7 +252,7 @@ RunResult run_scene(const RunOptions& options) {
           return f == OutputField::stress || f == OutputField::jacobian ||
                  f == OutputField::energy_density;
         });
-    text += describe(estimate_run(*backend, resolved, scene.duration, element_fields));
+    text += describe(estimate_run(*backend, resolved, counts, element_fields));
     print(text);
   }
   if (!options.run) return result;
