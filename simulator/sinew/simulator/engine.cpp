@@ -85,6 +85,11 @@ class CpuEngine final : public Backend {
   ElementFields element_fields() override {
     return core_.element_fields(a_, u_.data(), step_, threads_);
   }
+  Frame frame(bool with_fields) override {
+    Frame f{step_, time(), displacements(), energies(), {}};
+    if (with_fields) f.fields = core_.deferred_element_fields(a_, u_, step_, threads_);
+    return f;
+  }
 
  private:
   void ensure_forces(bool energy) {

@@ -22,6 +22,7 @@
 #include "sinew/simulator/checkpoint.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/frame_writer.hpp"
 #include "sinew/simulator/probes.hpp"
 #include "sinew/simulator/results_writer.hpp"
 #include "sinew/simulator/run_estimate.hpp"
@@ -316,20 +317,22 @@ RunResult run_scene(const RunOptions& options) {
   Schedule frames(resolved.output_interval, s, dt, total, false);
   Schedule rows(resolved.probe_interval, s, dt, total, !(resolved.probe_interval > 0));
 
+  // Frames are written on another thread while a GPU steps on (frame_writer.hpp).
+  FrameWriter frame_writer(*results, backend->host_idle_while_stepping(), s);
   const auto write_summary = [&] {
     summary.steps_done = backend->step_index();
     summary.simulated_time = scene_time();
-    summary.frames = results->frame_count();
+    summary.frames = frame_writer.frames_written();
+    summary.frame_writing_s = frame_writer.write_seconds();
     summary.wall_time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     write_run_summary(summary_path, summary);
   };
   bool hourglass_warned = false;
   const auto write_frame = [&] {
-    const auto u = backend->displacements();
-    const ElementFields fields = want_fields ? backend->element_fields() : ElementFields{};
-    results->append_frame(scene_time(), backend->step_index(), u, fields);
-    auto e = backend->energies();
+    Frame frame = backend->frame(want_fields);
+    auto e = frame.energies;
+    frame_writer.push(std::move(frame));
     e.time /= s;  // the summary speaks scene time throughout
     summary.energies.push_back(e);
     // One-point elements can fold into hourglass modes that the centre Jacobian does not see
@@ -347,6 +350,7 @@ RunResult run_scene(const RunOptions& options) {
         [&](const std::vector<Index>& nodes) { return backend->reaction(nodes); });
   };
   const auto write_ckpt = [&] {
+    frame_writer.finish();  // never a checkpoint ahead of the frames on disk
     Checkpoint c;
     c.state = backend->state();
     c.digest = digest;
@@ -420,6 +424,11 @@ RunResult run_scene(const RunOptions& options) {
       }
     }
   } catch (const InstabilityError& e) {
+    try {
+      frame_writer.finish();  // every frame so far in the file
+    } catch (const Error&) {
+      // The instability is the error to report; the summary is written below.
+    }
     finish_loop();
     summary.status = "unstable";
     summary.message = e.what();
@@ -430,6 +439,7 @@ RunResult run_scene(const RunOptions& options) {
     summary.status = "failed";
     summary.message = e.what();
     try {
+      frame_writer.finish();
       write_summary();
     } catch (const Error&) {
       // The original error is the one to report.
@@ -437,6 +447,7 @@ RunResult run_scene(const RunOptions& options) {
     throw;
   }
   progress.finish();
+  clock.time(StageClock::frames, [&] { frame_writer.finish(); });
   finish_loop();
   summary.status = "completed";
   write_summary();

@@ -58,6 +58,8 @@ class CudaEngine final : public Backend, public CudaTiming {
   std::array<double, 3> reaction(const std::vector<Index>& nodes) override;
   Energies energies() override;
   ElementFields element_fields() override;
+  Frame frame(bool with_fields) override;
+  bool host_idle_while_stepping() const override { return true; }
 
   // step() queues this many graph batches' worth of steps between host synchronisations.
   static constexpr int kQueuedBatches = 8;
@@ -103,6 +105,9 @@ class CudaEngine final : public Backend, public CudaTiming {
   void snapshot();
   void roll_back();
   std::vector<Vec3<T>> download_vec(const Vec3<T>* p) const;  // N vectors
+  // N vectors through the pinned output buffer on the copy stream, after the steps queued so far.
+  std::vector<Vec3<T>> download_pinned(const Vec3<T>* from) const;
+  Energies energies_at(const std::vector<Vec3<T>>& u);  // u: u(n) on the host
   std::vector<Vec3<T>> download_vec_n(const Vec3<T>* p, std::size_t count) const;
   void compute_internal_forces();  // f_ at u(n), on the device
   // The vectors of the listed nodes (ids checked by the caller), gathered on the device and copied
@@ -170,6 +175,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<Vec3<T>> buf_[3];
   DeviceArray<Vec3<T>> snap_u_, snap_up_;
   DeviceArray<double> element_energy_;
+  DeviceArray<double> energy_chunk_sum_;  // 2 per chunk of each collection (energies)
   // per-step scalars: per slot [activation (M) | force factors (F) | prescribed factors (P)];
   // device slots 0 .. batch_ − 1 for the graph, slot batch_ for a single launched step; staged on
   // the host in a pinned ring of ring_rows_ rows (fill_scalars).
