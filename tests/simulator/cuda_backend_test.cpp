@@ -268,9 +268,9 @@ TEST(CudaBackend, RestoredRunContinuesBitIdentically) {
   EXPECT_EQ(a->state().sliding_triangle, b->state().sliding_triangle);
 }
 
-// Calls of any length (the runner stops at every frame and probe row) run as batch graphs, stretch
-// graphs captured for their phase, or single launches: all give the bits of one long call, in both
-// precisions, with sliding (lists refreshed ahead in graphs, inline in single launches).
+// Calls of any length (the runner stops at every frame and probe row) run as batch graphs, short
+// graphs or single launches: all give the bits of one long call, in both precisions, with sliding
+// (lists refreshed ahead in graphs, inline in single launches).
 TEST(CudaBackend, CallsOfAnyLengthGiveTheBitsOfOneLongCall) {
   SKIP_WITHOUT_GPU();
   for (Precision p : {Precision::float32, Precision::float64}) {
@@ -314,7 +314,7 @@ TEST(CudaBackend, InstabilityIsDetectedWithTheStateAtTheLastGoodStep) {
   std::printf("[ measured ] %s\n", message.c_str());
   EXPECT_NE(message.find("at step"), std::string::npos);
   for (double v : gpu->displacements()) ASSERT_TRUE(std::isfinite(v)) << "state not at a good step";
-  // Calls of 73 steps (stretch graphs between the aligned ones) stop at the same step with the
+  // Calls of 73 steps (single launches between the aligned graphs) stop at the same step with the
   // same message.
   auto cut = make_cuda_backend(model, s);
   std::string cut_message;

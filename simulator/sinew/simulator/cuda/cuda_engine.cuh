@@ -9,7 +9,6 @@
 
 #include <array>
 #include <cstdint>
-#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -95,21 +94,13 @@ class CudaEngine final : public Backend, public CudaTiming {
   // ahead: sliding lists refreshed ahead on slide_stream_ (graph steps, stage timing); direct
   // steps refresh inline and never miss. programmatic: the kernels that follow a kernel in s are
   // programmatic dependent launches (graph steps with programmatic_).
-  // refresh_origin: with ahead_slide, the lists are refreshed at steps ≡ refresh_origin (mod
-  // refresh interval) (a graph's first step).
   void launch_step(std::int64_t step, int slot, cudaStream_t s, bool ahead_slide,
                    bool blowup_test = false,
                    std::vector<std::pair<std::string, cudaEvent_t>>* marks = nullptr,
-                   bool programmatic = false, std::int64_t refresh_origin = 0);
+                   bool programmatic = false);
   std::vector<std::pair<std::string, float>> stage_times(int repeats) override;
-  // The graph of `count` steps starting at a step ≡ phase (mod align_): scalars in slots 0 ..
-  // count − 1, lists refreshed at its first step.
-  cudaGraphExec_t capture_steps(int count, int phase = 0);
-  // The cached graph of `count` steps from phase `phase` (step() between outputs); null when the
-  // cache is full.
-  cudaGraphExec_t stretch_graph(int phase, int count);
+  cudaGraphExec_t capture_steps(int count);
   void build_graph();
-  void destroy_graphs();
   void run_direct_step();  // one step with its scalars, synchronised and checked
   void snapshot();
   void roll_back();
@@ -162,10 +153,6 @@ class CudaEngine final : public Backend, public CudaTiming {
   bool programmatic_ = false;
   cudaGraphExec_t graph_ = nullptr;        // batch_ steps
   cudaGraphExec_t short_graph_ = nullptr;  // align_ steps (null when align_ = batch_)
-  // Stretches between outputs that start or end off the align_ grid, by (phase, steps): captured
-  // on first use, so a run whose probes fall every 73 steps runs them as graphs too.
-  std::map<std::pair<int, int>, cudaGraphExec_t> stretch_graphs_;
-  static constexpr std::size_t kMaxStretchGraphs = 128;
 
   // elements
   DeviceArray<std::array<Index, 8>> elem_nodes_;
