@@ -142,7 +142,9 @@ TEST(FrameWriter, AnErrorInTheBackgroundIsReportedAndStopsTheWriting) {
   writer.push(b->frame(true));
   writer.finish();
   Frame bad = b->frame(true);
-  bad.fields = []() -> ElementFields { throw IoError("results.h5", "", "no space left on device"); };
+  bad.fields = []() -> ElementFields {
+    throw IoError("results.h5", "", "no space left on device");
+  };
   writer.push(std::move(bad));
   bool reported = false;
   try {

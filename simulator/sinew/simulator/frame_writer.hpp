@@ -28,8 +28,7 @@ class FrameWriter {
  public:
   // background: write on a worker thread (Backend::host_idle_while_stepping); else in push().
   // time_scaling: frame times are written as scene time, engine time / time_scaling.
-  FrameWriter(ResultsWriter& results, bool background, double time_scaling,
-              std::size_t depth = 2);
+  FrameWriter(ResultsWriter& results, bool background, double time_scaling, std::size_t depth = 2);
   // Joins the worker; frames still pending are written first, and errors are dropped (call
   // finish() to see them).
   ~FrameWriter();

@@ -29,7 +29,8 @@ struct ChunkPairSumBody {
   double* sum;
   SINEW_HD void operator()(std::int32_t c) const {
     const std::int32_t begin = c * std::int32_t(kChunk);
-    const std::int32_t end = begin + std::int32_t(kChunk) < size ? begin + std::int32_t(kChunk) : size;
+    const std::int32_t end =
+        begin + std::int32_t(kChunk) < size ? begin + std::int32_t(kChunk) : size;
     double a = 0, b = 0;
     for (std::int32_t k = begin; k < end; ++k) {
       a += value[2 * std::size_t(list[k])];
