@@ -125,7 +125,7 @@ RigRecipe recipe(const Face& f, const std::string& base, bool left) {
     // From the mandible's lower border, below and lateral to the mouth, up to the modiolus.
     const double drop = dot(mouth_corner - f.at("chin"), up);
     const Vec3d o = mouth_corner + 6 * kMm * lat - drop * up;
-    return sheet(name, o, modiolus - 6 * kMm * up, 18, 6, 3.5, 3.5, 1.5);
+    return sheet(name, o, modiolus - 2 * kMm * up, 18, 6, 3.5, 3.5, 1.5);
   }
   if (base == "orbicularis_oculi") {
     // Palpebral and orbital parts: a ring from the eyelids' opening out over the orbit's rim.

@@ -9,11 +9,19 @@
 namespace sinew::voxelizer {
 
 const std::vector<std::string>& rig_muscle_names() {
-  static const std::vector<std::string> names{"frontalis",         "corrugator",
-                                              "orbicularis_oculi", "zygomaticus_major",
-                                              "zygomaticus_minor", "levator_labii_superioris",
-                                              "risorius",          "depressor_anguli_oris",
-                                              "orbicularis_oris",  "mentalis"};
+  // The sphincters first: a later muscle overrides an earlier one where they overlap, and the
+  // cheek's muscles end in the orbicularis oris at the modiolus (their insertions must keep
+  // their voxels).
+  static const std::vector<std::string> names{"orbicularis_oris",
+                                              "orbicularis_oculi",
+                                              "frontalis",
+                                              "corrugator",
+                                              "zygomaticus_major",
+                                              "zygomaticus_minor",
+                                              "levator_labii_superioris",
+                                              "risorius",
+                                              "depressor_anguli_oris",
+                                              "mentalis"};
   return names;
 }
 

@@ -36,10 +36,10 @@ struct RigSpec {
   std::string field = "rig";
 };
 
-// The rig's muscles by name, in build order: frontalis, corrugator, orbicularis_oculi,
-// zygomaticus_major, zygomaticus_minor, levator_labii_superioris, risorius,
-// depressor_anguli_oris (each a left and right muscle, NAME_left and NAME_right), orbicularis_oris,
-// mentalis (one each, across the midline).
+// The rig's muscles by name, in build order (a later one overrides an earlier one where they
+// overlap): orbicularis_oris (one, across the midline), orbicularis_oculi, frontalis, corrugator,
+// zygomaticus_major, zygomaticus_minor, levator_labii_superioris, risorius, depressor_anguli_oris
+// (each a left and right muscle, NAME_left and NAME_right), mentalis (one, across the midline).
 const std::vector<std::string>& rig_muscle_names();
 
 // Reads the section. folder resolves the landmark path; units converts landmark_tolerance. Throws
