@@ -149,15 +149,13 @@ struct SpecReader {
     fb.allow_keys({"type", "direction", "origin", "insertion", "centre", "axis", "major", "radii"});
     if (!fb.has("type"))
       throw fb.error("missing key 'type' (constant, harmonic or circumferential)");
+    constexpr NameTable<FibreSpec::Kind, 3> kKinds{
+        {{"constant", FibreSpec::Kind::constant},
+         {"harmonic", FibreSpec::Kind::harmonic},
+         {"circumferential", FibreSpec::Kind::circumferential}}};
     FibreSpec f;
-    f.kind = fb.child("type").choose(
-        NameTable<FibreSpec::Kind, 3>{{{"constant", FibreSpec::Kind::constant},
-                                       {"harmonic", FibreSpec::Kind::harmonic},
-                                       {"circumferential", FibreSpec::Kind::circumferential}}},
-        "fibre type");
-    const char* kind_name = f.kind == FibreSpec::Kind::constant   ? "constant"
-                            : f.kind == FibreSpec::Kind::harmonic ? "harmonic"
-                                                                  : "circumferential";
+    f.kind = fb.child("type").choose(kKinds, "fibre type");
+    const char* kind_name = name_of(kKinds, f.kind);
     // Each type's own keys; any other is refused with the type's name.
     const std::vector<std::string> own =
         f.kind == FibreSpec::Kind::constant ? std::vector<std::string>{"direction"}
