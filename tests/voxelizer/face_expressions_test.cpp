@@ -232,7 +232,8 @@ TEST_P(FaceExpressionScan, EveryExpressionRunsWithNoInversion) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(LeePerrySmith, FaceExpressionScan, ::testing::Values("cpu", "cuda"));
+INSTANTIATE_TEST_SUITE_P(LeePerrySmith, FaceExpressionScan, ::testing::Values("cpu", "cuda"),
+                         [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
 
 }  // namespace
 }  // namespace sinew::voxelizer
