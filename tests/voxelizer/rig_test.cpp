@@ -2,6 +2,7 @@
 // validator, the sample head, the rig's closed muscle meshes, their mirror symmetry and depth, the
 // checks naming landmarks off the skin and muscles outside the tissue, circumferential fibres.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <filesystem>
@@ -309,6 +310,56 @@ TEST(CircumferentialFibres, SpecReadsAndChecksThem) {
   EXPECT_THROW(
       spec("{type: circumferential, centre: [0, 0, 0], axis: [1, 0, 0], major: [2, 0, 0]}"),
       ConfigError);  // major along the axis
+}
+
+// The tools: sinew-head writes the head and its landmarks; sinew-rig builds the rig from a spec,
+// writes its 18 muscles as closed OBJ files and the two pictures; a landmark off the skin makes it
+// fail with the landmark's name and no pictures.
+int tool(const std::string& exe, const std::string& args, const std::filesystem::path& log) {
+  const std::string cmd = exe + " " + args + " > " + log.string() + " 2>&1";
+  return WEXITSTATUS(std::system(cmd.c_str()));
+}
+
+TEST(RigTools, HeadAndRigWriteMeshesAndPictures) {
+  const TempDir dir;
+  ASSERT_EQ(tool(SINEW_HEAD_EXE, "-o " + (dir / "meshes/head").string(), dir / "head.log"), 0)
+      << read(dir / "head.log");
+  for (const char* f : {"skin.obj", "skull.obj", "skull_glide.obj", "landmarks.yaml"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "meshes/head" / f)) << f;
+  std::filesystem::create_directories(dir / "specs");
+  std::filesystem::create_directories(dir / "landmarks");
+  std::filesystem::copy_file(kSource / "data/specs/sample_head_4mm.yaml",
+                             dir / "specs/sample_head_4mm.yaml");
+  std::filesystem::copy_file(dir / "meshes/head/landmarks.yaml",
+                             dir / "landmarks/sample_head.yaml");
+  const std::string spec = (dir / "specs/sample_head_4mm.yaml").string();
+  ASSERT_EQ(tool(SINEW_RIG_EXE,
+                 spec + " -o " + (dir / "rig").string() + " --landmarks-png " +
+                     (dir / "l.png").string() + " --muscles-png " + (dir / "m.png").string(),
+                 dir / "rig.log"),
+            0)
+      << read(dir / "rig.log");
+  int objs = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "rig")) {
+    TriangleMesh m = load_mesh(e.path());
+    EXPECT_TRUE(describe_mesh(m).closed) << e.path();
+    ++objs;
+  }
+  EXPECT_EQ(objs, 18);
+  EXPECT_GT(std::filesystem::file_size(dir / "l.png"), 10000u);
+  EXPECT_GT(std::filesystem::file_size(dir / "m.png"), 10000u);
+
+  Landmarks l = head_landmarks(HeadParams{});
+  l.points["chin"].y -= 12e-3;  // 12 mm below the chin, in the air
+  dir.write("landmarks/sample_head.yaml", landmarks_yaml(l, LengthUnit::mm));
+  std::filesystem::remove(dir / "l2.png");
+  EXPECT_EQ(tool(SINEW_RIG_EXE,
+                 spec + " -o " + (dir / "rig2").string() + " --landmarks-png " +
+                     (dir / "l2.png").string(),
+                 dir / "rig2.log"),
+            1);
+  EXPECT_NE(read(dir / "rig2.log").find("chin is"), std::string::npos) << read(dir / "rig2.log");
+  EXPECT_FALSE(std::filesystem::exists(dir / "l2.png"));
 }
 
 }  // namespace
