@@ -147,4 +147,15 @@ HarmonicFibres harmonic_fibres(const std::vector<formats::Lattice>& voxels,
   return out;
 }
 
+Vec3d circumferential_fibre(const Vec3d& p, const Vec3d& centre, const Vec3d& axis,
+                            const Vec3d& major, double radius_major, double radius_minor) {
+  const Vec3d minor = cross(axis, major);
+  const Vec3d x = p - centre;
+  const Vec3d grad = (dot(x, major) / (radius_major * radius_major)) * major +
+                     (dot(x, minor) / (radius_minor * radius_minor)) * minor;
+  const Vec3d t = cross(axis, grad);
+  const double len = norm(t);
+  return len > 1e-300 ? (1.0 / len) * t : minor;
+}
+
 }  // namespace sinew::voxelizer

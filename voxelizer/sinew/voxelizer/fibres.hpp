@@ -38,4 +38,13 @@ HarmonicFibres harmonic_fibres(const std::vector<formats::Lattice>& voxels,
                                const std::vector<DirichletTag>& tags, const std::string& name,
                                const std::vector<double>& fractions = {});
 
+// Circumferential fibres for sphincters (orbicularis oculi and oris), which a harmonic
+// origin→insertion field cannot give: around the axis a (unit) through the centre c, tangent to the
+// family of similar ellipses q(x) = (x·M)²/A² + (x·N)²/B² = const in the plane normal to a, with
+// x = p − c, M the unit major axis, N = a × M, A and B the semi-axes (only A/B matters):
+//   f(p) = a × ∇q / |a × ∇q|,  ∇q = 2 ((x·M)/A² M + (x·N)/B² N).
+// On the axis (∇q = 0) f = N, the tangent at the major axis' ends. Units: any (c, p alike).
+Vec3d circumferential_fibre(const Vec3d& p, const Vec3d& centre, const Vec3d& axis,
+                            const Vec3d& major, double radius_major, double radius_minor);
+
 }  // namespace sinew::voxelizer

@@ -1,5 +1,6 @@
 #include "sinew/voxelizer/spec.hpp"
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -142,6 +143,65 @@ struct SpecReader {
     if (!s.box && !s.surface) throw n.error("give a box, a surface with a distance, or both");
     return s;
   }
+
+  // A muscle's fibre field: constant, harmonic or circumferential (docs/voxelizer.md, fibres).
+  FibreSpec fibres(const YamlNode& fb) const {
+    fb.allow_keys({"type", "direction", "origin", "insertion", "centre", "axis", "major", "radii"});
+    if (!fb.has("type"))
+      throw fb.error("missing key 'type' (constant, harmonic or circumferential)");
+    constexpr NameTable<FibreSpec::Kind, 3> kKinds{
+        {{"constant", FibreSpec::Kind::constant},
+         {"harmonic", FibreSpec::Kind::harmonic},
+         {"circumferential", FibreSpec::Kind::circumferential}}};
+    FibreSpec f;
+    f.kind = fb.child("type").choose(kKinds, "fibre type");
+    const char* kind_name = name_of(kKinds, f.kind);
+    // Each type's own keys; any other is refused with the type's name.
+    const std::vector<std::string> own =
+        f.kind == FibreSpec::Kind::constant ? std::vector<std::string>{"direction"}
+        : f.kind == FibreSpec::Kind::harmonic
+            ? std::vector<std::string>{"origin", "insertion"}
+            : std::vector<std::string>{"centre", "axis", "major", "radii"};
+    for (const auto& k : fb.keys()) {
+      if (k == "type") continue;
+      if (std::find(own.begin(), own.end(), k) == own.end()) {
+        throw fb.child(k).error(std::string("a ") + kind_name + " fibre field has no " + k);
+      }
+    }
+    auto unit_vector = [&](const char* key) {
+      const Vec3d d = vec3(fb.require(key));
+      const double len = norm(d);
+      if (!(len > 0)) throw fb.child(key).error("must not be zero");
+      return (1.0 / len) * d;
+    };
+    if (f.kind == FibreSpec::Kind::constant) {
+      f.direction = unit_vector("direction");
+    } else if (f.kind == FibreSpec::Kind::harmonic) {
+      if (!fb.has("origin") || !fb.has("insertion")) {
+        throw fb.error("a harmonic fibre field needs origin and insertion");
+      }
+      f.origin = selector(fb.child("origin"));
+      f.insertion = selector(fb.child("insertion"));
+    } else {
+      f.centre = vec3(fb.require("centre"), metres_per_unit(units));
+      f.axis = unit_vector("axis");
+      const Vec3d major = fb.has("major") ? unit_vector("major") : Vec3d{1, 0, 0};
+      // The major axis made normal to the axis (Gram-Schmidt).
+      const Vec3d m = major - dot(major, f.axis) * f.axis;
+      if (!(norm(m) > 1e-6))
+        throw fb.child(fb.has("major") ? "major" : "axis")
+            .error("the major axis must not be parallel to the axis");
+      f.major = (1.0 / norm(m)) * m;
+      if (fb.has("radii")) {
+        const auto rr = fb.child("radii");
+        const auto items = rr.items();
+        if (items.size() != 2) throw rr.error("expected [major, minor]");
+        f.radius_major = items[0].positive();
+        f.radius_minor = items[1].positive();
+      }
+    }
+    return f;
+  }
 };
 
 std::string list_of(const std::set<std::string>& names) {
@@ -199,6 +259,8 @@ std::string MeshSource::describe() const {
     case Kind::cylinder:
       os << "cylinder(r=" << radii.x << ",h=" << radii.y << ")";
       break;
+    case Kind::generated:
+      return generated ? generated->source : "generated";
   }
   return os.str();
 }
@@ -229,7 +291,7 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   if (!root.is_map()) throw root.error("the spec must be a YAML map");
   root.allow_keys({"units", "output", "resolution", "weld_tolerance", "outer", "inner",
                    "tissue_thickness", "layers", "materials", "muscles", "tendons", "regions",
-                   "boundary", "node_sets", "visual"});
+                   "boundary", "node_sets", "visual", "rig"});
   Spec spec;
   spec.file = file;
   if (root.has("units")) r.units = SpecReader::unit(root.child("units"));
@@ -335,6 +397,18 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
     }
   }
 
+  // The rig's muscles are built when voxelizing (rig.hpp); its section is read on its own.
+  if (root.has("rig")) {
+    spec.rig = parse_rig_spec(root.child("rig"), r.folder, r.units);
+    if (!spec.find_material(spec.rig->material)) {
+      const auto rn = root.child("rig");
+      throw(rn.has("material") ? rn.child("material") : rn)
+          .error("unknown material '" + spec.rig->material +
+                 "' for the rig's muscles (give materials: {preset: warburton2013} or a table "
+                 "entry of that name)");
+    }
+  }
+
   // Muscles.
   for (const auto& m : root.child("muscles").items()) {
     m.allow_keys(
@@ -355,32 +429,7 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
         if (s.passive_linear_stretch <= 1) throw p.child("linear_stretch").error("must be > 1");
       }
     }
-    const auto fb = m.require("fibres");
-    fb.allow_keys({"type", "direction", "origin", "insertion"});
-    if (!fb.has("type")) throw fb.error("missing key 'type' (constant or harmonic)");
-    s.fibres.kind = fb.child("type").choose(
-        NameTable<FibreSpec::Kind, 2>{
-            {{"constant", FibreSpec::Kind::constant}, {"harmonic", FibreSpec::Kind::harmonic}}},
-        "fibre type");
-    if (s.fibres.kind == FibreSpec::Kind::constant) {
-      if (!fb.has("direction")) throw fb.error("a constant fibre field needs a direction");
-      if (fb.has("origin") || fb.has("insertion")) {
-        throw fb.error("origin/insertion are for harmonic fibres");
-      }
-      const Vec3d d = SpecReader::vec3(fb.child("direction"));
-      const double len = norm(d);
-      if (!(len > 0)) throw fb.child("direction").error("must not be zero");
-      s.fibres.direction = (1.0 / len) * d;
-    } else {
-      if (fb.has("direction")) {
-        throw fb.child("direction").error("a harmonic fibre field has no direction");
-      }
-      if (!fb.has("origin") || !fb.has("insertion")) {
-        throw fb.error("a harmonic fibre field needs origin and insertion");
-      }
-      s.fibres.origin = r.selector(fb.child("origin"));
-      s.fibres.insertion = r.selector(fb.child("insertion"));
-    }
+    s.fibres = r.fibres(m.require("fibres"));
     for (const auto& other : spec.muscles) {
       if (other.name == s.name) {
         throw m.child("name").error("duplicate muscle name '" + s.name + "'");
@@ -487,7 +536,12 @@ nlohmann::json box_json(const Box& b) {
 nlohmann::json mesh_json(const MeshSource& m) {
   nlohmann::json j;
   j["source"] = m.describe();
-  if (m.kind != MeshSource::Kind::file) {
+  if (m.kind == MeshSource::Kind::generated) {
+    if (m.generated) {
+      j["vertices"] = m.generated->vertices.size();
+      j["triangles"] = m.generated->triangles.size();
+    }
+  } else if (m.kind != MeshSource::Kind::file) {
     j["centre"] = vec_json(m.centre);
     j["radii"] = vec_json(m.radii);
     j["box_min"] = vec_json(m.box_lo);
@@ -547,10 +601,16 @@ std::string spec_to_json(const Spec& spec) {
                         {"linear_stretch", m.passive_linear_stretch}}}};
     if (m.fibres.kind == FibreSpec::Kind::constant) {
       mj["fibres"] = {{"type", "constant"}, {"direction", vec_json(m.fibres.direction)}};
-    } else {
+    } else if (m.fibres.kind == FibreSpec::Kind::harmonic) {
       mj["fibres"] = {{"type", "harmonic"},
                       {"origin", selector_json(m.fibres.origin)},
                       {"insertion", selector_json(m.fibres.insertion)}};
+    } else {
+      mj["fibres"] = {{"type", "circumferential"},
+                      {"centre", vec_json(m.fibres.centre)},
+                      {"axis", vec_json(m.fibres.axis)},
+                      {"major", vec_json(m.fibres.major)},
+                      {"radii", {m.fibres.radius_major, m.fibres.radius_minor}}};
     }
     j["muscles"].push_back(mj);
   }
@@ -577,6 +637,15 @@ std::string spec_to_json(const Spec& spec) {
   }
   for (const auto& v : spec.visual) {
     j["visual"].push_back({{"name", v.name}, {"surface", ref_json(v.surface)}});
+  }
+  if (spec.rig) {
+    j["rig"] = {{"landmarks", spec.rig->landmarks.string()},
+                {"muscles", spec.rig->muscles},
+                {"material", spec.rig->material},
+                {"reference_stress", spec.rig->reference_stress},
+                {"depth_scale", spec.rig->depth_scale},
+                {"landmark_tolerance_m", spec.rig->landmark_tolerance},
+                {"min_inside", spec.rig->min_inside}};
   }
   return j.dump();
 }

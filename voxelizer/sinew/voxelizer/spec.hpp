@@ -9,12 +9,14 @@
 #include <array>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "sinew/common/math.hpp"
 #include "sinew/voxelizer/mesh.hpp"
+#include "sinew/voxelizer/rig_spec.hpp"
 
 namespace sinew::voxelizer {
 
@@ -27,9 +29,11 @@ struct Box {
 };
 
 // Where a mesh comes from: a file (any format assimp reads) or a generated primitive (for examples
-// and tests; see primitives.hpp). The transform applies to both (unit, scale, rotate, translate).
+// and tests; see primitives.hpp), or a mesh built in memory (the rig's muscles: `generated`, in
+// metres, the transform left at identity). The transform applies to all (unit, scale, rotate,
+// translate).
 struct MeshSource {
-  enum class Kind { file, sphere, ellipsoid, box, cylinder };
+  enum class Kind { file, sphere, ellipsoid, box, cylinder, generated };
   Kind kind = Kind::file;
   std::filesystem::path path;  // Kind::file, resolved against the spec's folder
   // Primitives, in the mesh's own unit before the transform: centre, radii (sphere: x only;
@@ -38,6 +42,7 @@ struct MeshSource {
   Vec3d radii{0, 0, 0};
   Vec3d box_lo{0, 0, 0}, box_hi{0, 0, 0};
   int subdivisions = 4;
+  std::shared_ptr<const TriangleMesh> generated;  // Kind::generated
   MeshTransform transform;
   std::string field;             // key path in the spec, for messages
   std::string describe() const;  // the path, or e.g. "sphere(r=0.01)"
@@ -78,10 +83,14 @@ struct LayerSpec {
 };
 
 struct FibreSpec {
-  enum class Kind { constant, harmonic };
+  enum class Kind { constant, harmonic, circumferential };
   Kind kind = Kind::constant;
   Vec3d direction{1, 0, 0};    // constant: unit after reading
   Selector origin, insertion;  // harmonic: Dirichlet 0 and 1 regions (voxel centres)
+  // circumferential (sphincters; fibres.hpp): around `axis` through `centre` (m), tangent to the
+  // ellipses of semi-axes proportional to radii (major along `major`, minor along axis × major).
+  Vec3d centre{0, 0, 0}, axis{0, 0, 1}, major{1, 0, 0};  // axis, major: unit, orthogonal
+  double radius_major = 1, radius_minor = 1;             // only their ratio matters
 };
 
 struct MuscleSpec {
@@ -147,6 +156,7 @@ struct Spec {
   std::vector<BoundarySpec> boundary;
   std::vector<NodeSetSpec> node_sets;
   std::vector<VisualSpec> visual;  // default: [{name: skin, surface: outer}]
+  std::optional<RigSpec> rig;      // muscles built from landmarks (rig.hpp), added when voxelizing
 
   const MaterialSpec* find_material(const std::string& name) const;
 };

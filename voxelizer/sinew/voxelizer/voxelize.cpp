@@ -24,6 +24,7 @@
 #include "sinew/voxelizer/fractions.hpp"
 #include "sinew/voxelizer/offset.hpp"
 #include "sinew/voxelizer/primitives.hpp"
+#include "sinew/voxelizer/rig.hpp"
 
 namespace sinew::voxelizer {
 
@@ -67,6 +68,9 @@ TriangleMesh load_mesh_source(const MeshSource& s) {
       break;
     case MeshSource::Kind::cylinder:
       m = make_cylinder(s.centre, s.radii.x, s.radii.y, s.subdivisions);
+      break;
+    case MeshSource::Kind::generated:
+      if (s.generated) m = *s.generated;
       break;
     case MeshSource::Kind::file:
       break;
@@ -571,6 +575,16 @@ class Pipeline {
         mu.fibres.assign(n, to_point(ms.fibres.direction));
         continue;
       }
+      if (ms.fibres.kind == FibreSpec::Kind::circumferential) {
+        mu.fibres.resize(n);
+        for (std::size_t j = 0; j < n; ++j) {
+          const auto& f = ms.fibres;
+          mu.fibres[j] =
+              to_point(circumferential_fibre(element_centre(mu.elements[j]), f.centre, f.axis,
+                                             f.major, f.radius_major, f.radius_minor));
+        }
+        continue;
+      }
       const SignedField* so =
           ms.fibres.origin.surface ? named_surface(*ms.fibres.origin.surface) : nullptr;
       const SignedField* si =
@@ -704,7 +718,13 @@ VoxelizeResult voxelize(const Spec& spec, const VoxelizeOptions& options) {
   const int previous = omp_get_max_threads();
   if (options.threads > 0) omp_set_num_threads(options.threads);
   try {
-    Pipeline pipeline(spec, options);
+    // The rig's muscles are built first (they need the skin) and join the spec's own.
+    std::optional<Spec> rigged;
+    if (spec.rig) {
+      rigged = spec;
+      add_rig_muscles(*rigged);
+    }
+    Pipeline pipeline(rigged ? *rigged : spec, options);
     auto r = pipeline.run();
     if (options.threads > 0) omp_set_num_threads(previous);
     return r;

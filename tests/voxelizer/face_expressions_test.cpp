@@ -1,0 +1,239 @@
+// The expressions on the sample head's rig (data/scenes/face_*.yaml, docs/faces.md), on the CPU
+// at the CI's coarse resolution (data/specs/sample_head_4mm.yaml) and on the CUDA backend when a
+// device is there (skipping visibly otherwise): each runs to its end with no inversion; the
+// mirror-symmetric ones give mirror-symmetric skin displacements to 1% of the largest; the smile
+// lifts the mouth's corners and draws them back by millimetres, the brow raise lifts the brows,
+// the frown draws the inner brows together, the one-sided sneer lifts the left side only.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "pipeline_test_util.hpp"
+#include "sinew/formats/model_file.hpp"
+#include "sinew/postprocess/results_reader.hpp"
+#include "sinew/simulator/cuda_backend.hpp"
+#include "sinew/simulator/runner.hpp"
+#include "sinew/voxelizer/head.hpp"
+#include "sinew/voxelizer/spec.hpp"
+#include "sinew/voxelizer/voxelize.hpp"
+
+namespace sinew::voxelizer {
+namespace {
+
+const std::filesystem::path kSource = SINEW_SOURCE_DIR;
+
+std::string read(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The layout of the repository's data/ folder in a temporary one: the generated head in
+// meshes/head, the committed landmarks, the CI spec voxelized to specs/sample_head_4mm.h5.
+const testing::TempDir& workspace() {
+  static const testing::TempDir dir = [] {
+    testing::TempDir d;
+    write_head(HeadParams{}, d / "meshes/head");
+    std::filesystem::create_directories(d / "landmarks");
+    std::filesystem::copy_file(kSource / "data/landmarks/sample_head.yaml",
+                               d / "landmarks/sample_head.yaml");
+    std::filesystem::create_directories(d / "specs");
+    const auto spec_path = d / "specs/sample_head_4mm.yaml";
+    std::filesystem::copy_file(kSource / "data/specs/sample_head_4mm.yaml", spec_path);
+    const Spec spec = read_spec(spec_path);
+    formats::write_model(voxelize(spec).model, (d / "specs/sample_head_4mm.h5").string());
+    std::filesystem::create_directories(d / "scenes");
+    return d;
+  }();
+  return dir;
+}
+
+struct ExpressionRun {
+  simulator::RunSummary summary;
+  std::filesystem::path dir;
+};
+
+const std::filesystem::path kScan =
+    std::filesystem::path(SINEW_SHARED_MESH_DIR) / "lee_perry_smith_head.obj";
+
+// The Lee Perry-Smith scan's model (data/specs/lee_perry_smith_4mm.yaml with the mesh path pointed
+// at SINEW_SHARED_MESH_DIR), voxelized into the workspace once.
+void voxelize_scan() {
+  static bool done = false;
+  if (done) return;
+  const auto& d = workspace();
+  std::filesystem::copy_file(kSource / "data/landmarks/lee_perry_smith.yaml",
+                             d / "landmarks/lee_perry_smith.yaml");
+  std::string spec = read(kSource / "data/specs/lee_perry_smith_4mm.yaml");
+  const std::string rel = "../../../shared/data/meshes/lee_perry_smith_head.obj";
+  const auto at = spec.find(rel);
+  ASSERT_NE(at, std::string::npos);
+  spec.replace(at, rel.size(), kScan.string());
+  const auto path = d.write("specs/lee_perry_smith_4mm.yaml", spec);
+  formats::write_model(voxelize(read_spec(path)).model,
+                       (d / "specs/lee_perry_smith_4mm.h5").string());
+  done = true;
+}
+
+// Runs data/scenes/face_NAME.yaml on `model` (sample_head_4mm or lee_perry_smith_4mm) on
+// `device`, once per triple.
+const ExpressionRun& run(const std::string& name, const std::string& device,
+                         const std::string& model = "sample_head_4mm") {
+  static std::map<std::tuple<std::string, std::string, std::string>, ExpressionRun> runs;
+  const auto key = std::make_tuple(name, device, model);
+  if (auto it = runs.find(key); it != runs.end()) return it->second;
+  const auto& d = workspace();
+  std::string scene = read(kSource / ("data/scenes/face_" + name + ".yaml"));
+  const std::string original = "model: ../specs/sample_head_3mm.h5";
+  const auto at = scene.find(original);
+  EXPECT_NE(at, std::string::npos);
+  scene.replace(at, original.size(), "model: ../specs/" + model + ".h5");
+  const std::string tag = name + "_" + device + "_" + model;
+  const auto scene_path = d.write("scenes/" + tag + ".yaml", scene);
+  simulator::RunOptions o;
+  o.scene_path = scene_path.string();
+  o.output_dir = (d / ("out_" + tag)).string();
+  o.device = device;
+  o.quiet = true;
+  o.print = [](const std::string&) {};
+  ExpressionRun r{simulator::run_scene(o).summary, o.output_dir};
+  return runs.emplace(key, std::move(r)).first->second;
+}
+
+// The last row of a displacement probe: (ux, uy, uz) in mm.
+Vec3d probe_mm(const ExpressionRun& r, const std::string& probe) {
+  std::ifstream in(r.dir / ("probe_" + probe + ".csv"));
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  std::stringstream s(last);
+  std::string cell;
+  std::vector<double> v;
+  while (std::getline(s, cell, ',')) v.push_back(std::stod(cell));
+  EXPECT_EQ(v.size(), 5u) << probe;
+  return v.size() == 5 ? Vec3d{1e3 * v[2], 1e3 * v[3], 1e3 * v[4]} : Vec3d{0, 0, 0};
+}
+
+// max over skin vertices v with a mirror image m(v) of |u(v) − M u(m(v))|, and max |u|, at the
+// last frame; M mirrors x. The skin mesh is its own mirror image to the micrometre.
+std::pair<double, double> mirror_error(const ExpressionRun& r) {
+  const auto s = postprocess::read_surface((r.dir / "results.h5").string(), "skin");
+  const std::size_t n = s.vertex_count();
+  const auto& last = s.frames.back();
+  std::map<std::tuple<long, long, long>, std::size_t> index;
+  auto key = [&](std::size_t v, bool mirror) {
+    return std::make_tuple(std::lround((mirror ? -1 : 1) * s.rest[3 * v] * 1e6),
+                           std::lround(s.rest[3 * v + 1] * 1e6),
+                           std::lround(s.rest[3 * v + 2] * 1e6));
+  };
+  for (std::size_t v = 0; v < n; ++v) index[key(v, false)] = v;
+  double err = 0, umax = 0;
+  std::size_t paired = 0;
+  for (std::size_t v = 0; v < n; ++v) {
+    const Vec3d u{last[3 * v] - s.rest[3 * v], last[3 * v + 1] - s.rest[3 * v + 1],
+                  last[3 * v + 2] - s.rest[3 * v + 2]};
+    umax = std::max(umax, norm(u));
+    const auto it = index.find(key(v, true));
+    if (it == index.end()) continue;
+    const std::size_t w = it->second;
+    ++paired;
+    const Vec3d uw{-(last[3 * w] - s.rest[3 * w]), last[3 * w + 1] - s.rest[3 * w + 1],
+                   last[3 * w + 2] - s.rest[3 * w + 2]};
+    err = std::max(err, norm(u - uw));
+  }
+  EXPECT_GT(paired, n * 9 / 10);  // all but the back's seam column
+  return {err, umax};
+}
+
+// Expected motion per expression, in mm (x the subject's left, y up, z forward out of the face).
+void expect_motion(const std::string& name, const ExpressionRun& r) {
+  auto u = [&](const char* probe) { return probe_mm(r, probe); };
+  if (name == "smile") {
+    // The mouth's corners go up by millimetres, back and outward.
+    for (const char* p : {"mouth_corner_left", "mouth_corner_right"}) {
+      SCOPED_TRACE(p);
+      EXPECT_GT(u(p).y, 2.0);
+      EXPECT_LT(u(p).z, -0.5);
+    }
+    EXPECT_GT(u("mouth_corner_left").x, 0.2);
+    EXPECT_LT(u("mouth_corner_right").x, -0.2);
+  } else if (name == "brow_raise") {
+    EXPECT_GT(u("brow_centre_left").y, 1.5);
+    EXPECT_GT(u("brow_centre_right").y, 1.5);
+    EXPECT_LT(std::abs(u("mouth_corner_left").y), 0.1);  // the mouth stays
+  } else if (name == "frown") {
+    // The inner brows move towards the midline.
+    EXPECT_LT(u("brow_inner_left").x, -0.5);
+    EXPECT_GT(u("brow_inner_right").x, 0.5);
+  } else if (name == "sneer") {
+    EXPECT_GT(u("alar_base_left").y, 2.0);
+    EXPECT_LT(std::abs(u("alar_base_right").y), 0.2);  // one-sided
+  } else if (name == "pout") {
+    EXPECT_GT(u("upper_lip").z, 1.0);           // the lips come forward
+    EXPECT_LT(u("mouth_corner_left").x, -1.0);  // the sphincter narrows the mouth
+    EXPECT_GT(u("mouth_corner_right").x, 1.0);
+  } else if (name == "grimace") {
+    EXPECT_LT(u("brow_inner_left").x, -0.5);    // the frown in it
+    EXPECT_LT(u("mouth_corner_left").z, -0.5);  // the corners drawn back
+  }
+}
+
+class FaceExpression : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+// Each expression on each backend: runs to its end with no inversion (an inversion stops the run
+// with InstabilityError), moves as expected, and, when its activations are mirror-symmetric, gives
+// mirror-symmetric skin displacements to 1% of the largest. One case per run (ctest starts each
+// case in its own process).
+TEST_P(FaceExpression, RunsWithoutInversionAndMovesAsExpected) {
+  const auto& [name, device] = GetParam();
+  if (device == "cuda" && !simulator::cuda_device_available()) GTEST_SKIP() << "no CUDA device";
+  const ExpressionRun& r = run(name, device);
+  EXPECT_EQ(r.summary.status, "completed");
+  EXPECT_EQ(r.summary.steps_done, r.summary.steps_planned);
+  expect_motion(name, r);
+  if (name != "sneer") {  // the sneer is one-sided
+    const auto [err, umax] = mirror_error(r);
+    EXPECT_GT(umax, 1e-4);  // it moved (> 0.1 mm)
+    EXPECT_LE(err, 0.01 * umax) << "largest displacement " << umax * 1e3 << " mm";
+  }
+}
+
+std::string name_of(const ::testing::TestParamInfo<std::tuple<std::string, std::string>>& i) {
+  return std::get<0>(i.param) + "_" + std::get<1>(i.param);
+}
+
+INSTANTIATE_TEST_SUITE_P(SampleHead, FaceExpression,
+                         ::testing::Combine(::testing::Values("brow_raise", "frown", "smile",
+                                                              "sneer", "pout", "grimace"),
+                                            ::testing::Values("cpu", "cuda")),
+                         name_of);
+
+// The real head scan (skipping when ../shared is absent): every expression runs to its end with
+// no inversion, in one case (one voxelization of its 45,562 elements).
+class FaceExpressionScan : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(FaceExpressionScan, EveryExpressionRunsWithNoInversion) {
+  if (!std::filesystem::exists(kScan)) GTEST_SKIP() << "no " << kScan << " (../shared absent)";
+  if (GetParam() == "cuda" && !simulator::cuda_device_available()) GTEST_SKIP() << "no CUDA device";
+  voxelize_scan();
+  for (const char* name : {"brow_raise", "frown", "smile", "sneer", "pout", "grimace"}) {
+    SCOPED_TRACE(name);
+    const ExpressionRun& r = run(name, GetParam(), "lee_perry_smith_4mm");
+    EXPECT_EQ(r.summary.status, "completed");
+    EXPECT_EQ(r.summary.steps_done, r.summary.steps_planned);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(LeePerrySmith, FaceExpressionScan, ::testing::Values("cpu", "cuda"),
+                         [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
+
+}  // namespace
+}  // namespace sinew::voxelizer
