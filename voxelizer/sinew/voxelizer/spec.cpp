@@ -153,6 +153,7 @@ std::string list_of(const std::set<std::string>& names) {
 void check_surface_names(const Spec& spec) {
   std::set<std::string> known{"outer"};
   if (spec.inner || spec.tissue_thickness) known.insert("inner");
+  if (spec.glide_depth) known.insert("glide");
   for (const auto& m : spec.muscles) known.insert(m.name);
   for (const auto& t : spec.tendons)
     if (t.mesh) known.insert(t.name);
@@ -228,8 +229,8 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   const YamlNode root = parse_yaml(yaml_text, file.string());
   if (!root.is_map()) throw root.error("the spec must be a YAML map");
   root.allow_keys({"units", "output", "resolution", "weld_tolerance", "outer", "inner",
-                   "tissue_thickness", "layers", "materials", "muscles", "tendons", "regions",
-                   "boundary", "node_sets", "visual"});
+                   "tissue_thickness", "glide_depth", "layers", "materials", "muscles", "tendons",
+                   "regions", "boundary", "node_sets", "visual"});
   Spec spec;
   spec.file = file;
   if (root.has("units")) r.units = SpecReader::unit(root.child("units"));
@@ -273,6 +274,12 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
     spec.tissue_thickness = r.length(root.child("tissue_thickness"));
   if (spec.inner && spec.tissue_thickness) {
     throw root.child("tissue_thickness").error("give either inner or tissue_thickness, not both");
+  }
+  if (root.has("glide_depth")) {
+    const auto n = root.child("glide_depth");
+    spec.glide_depth = r.length(n);
+    if (!spec.inner && !spec.tissue_thickness)
+      throw n.error("a glide surface lies below the inner surface: give inner or tissue_thickness");
   }
 
   // Materials.
@@ -410,7 +417,7 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   read_regions("regions", true, spec.regions);
   {
     // Muscles, tendons and regions name surfaces: one name each, and not a reserved one.
-    std::set<std::string> names{"outer", "inner"};
+    std::set<std::string> names{"outer", "inner", "glide"};
     auto unique = [&](const char* key, const auto& list) {
       for (std::size_t i = 0; i < list.size(); ++i) {
         if (!names.insert(list[i].name).second) {
@@ -525,6 +532,7 @@ std::string spec_to_json(const Spec& spec) {
   j["outer"] = mesh_json(spec.outer);
   if (spec.inner) j["inner"] = mesh_json(*spec.inner);
   if (spec.tissue_thickness) j["tissue_thickness"] = *spec.tissue_thickness;
+  if (spec.glide_depth) j["glide_depth"] = *spec.glide_depth;
   for (const auto& l : spec.layers) {
     nlohmann::json lj{{"material", l.material}};
     if (l.thickness) lj["thickness"] = *l.thickness;

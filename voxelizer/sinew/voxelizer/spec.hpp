@@ -138,6 +138,10 @@ struct Spec {
   MeshSource outer;
   std::optional<MeshSource> inner;
   std::optional<double> tissue_thickness;  // m, derive the inner surface from the outer one
+  // m: derive the glide surface "glide", this far below the inner surface (given or derived): the
+  // surface the deep layer slides on when the nodes of the voxels the skull cuts lie inside the
+  // skull (docs/voxelizer.md, "Safe constraints").
+  std::optional<double> glide_depth;
 
   std::vector<LayerSpec> layers;
   std::vector<MaterialSpec> materials;

@@ -18,6 +18,7 @@
 #include "sinew/common/version.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/formats/sha256.hpp"
+#include "sinew/voxelizer/constraint_checks.hpp"
 #include "sinew/voxelizer/constraints.hpp"
 #include "sinew/voxelizer/embedding.hpp"
 #include "sinew/voxelizer/fibres.hpp"
@@ -166,6 +167,7 @@ class Pipeline {
 
   LoadedMesh outer_;
   std::optional<LoadedMesh> inner_;
+  std::optional<LoadedMesh> glide_;  // spec.glide_depth: the surface below the inner one
   std::vector<LoadedMesh> muscles_, tendons_;
   std::vector<std::optional<LoadedMesh>> regions_;
   std::map<std::string, LoadedMesh> extra_;  // meshes referenced by field path
@@ -301,6 +303,23 @@ class Pipeline {
       inner_ = std::move(lm);
     }
     if (inner_) make_field(*inner_);
+    if (spec_.glide_depth) {
+      // The glide surface lies glide_depth below the inner surface: an inward offset of the skin by
+      // tissue_thickness + glide_depth when the inner surface is derived (so it follows the skin
+      // as the derived skull does), else of the inner mesh itself.
+      const double d = *spec_.glide_depth;
+      const bool derived = spec_.tissue_thickness.has_value();
+      const double depth = derived ? *spec_.tissue_thickness + d : d;
+      LoadedMesh lm;
+      lm.mesh =
+          inward_offset_surface(derived ? outer_.mesh : inner_->mesh, depth, std::min(h_, d / 3));
+      lm.mesh.source = "offset of " + std::string(derived ? "outer" : "inner") + " by " +
+                       std::to_string(depth) + " m";
+      lm.diagnostics = clean_mesh(lm.mesh, 0.0);
+      result_.summary.meshes.push_back({"glide (derived)", lm.mesh.source, lm.diagnostics});
+      glide_ = std::move(lm);
+      make_field(*glide_);
+    }
     for (auto& m : muscles_) make_field(m);
     for (auto& m : tendons_) make_field(m);
     for (auto& m : regions_)
@@ -312,6 +331,7 @@ class Pipeline {
     if (ref.mesh) return extra_.at(ref.field).field.get();
     if (ref.name == "outer") return outer_.field.get();
     if (ref.name == "inner") return inner_ ? inner_->field.get() : nullptr;
+    if (ref.name == "glide") return glide_ ? glide_->field.get() : nullptr;
     for (std::size_t i = 0; i < spec_.muscles.size(); ++i)
       if (spec_.muscles[i].name == ref.name) return muscles_[i].field.get();
     for (std::size_t i = 0; i < spec_.tendons.size(); ++i)
@@ -325,6 +345,7 @@ class Pipeline {
     if (ref.mesh) return extra_.at(ref.field).mesh;
     if (ref.name == "outer") return outer_.mesh;
     if (ref.name == "inner") return inner_->mesh;
+    if (ref.name == "glide") return glide_->mesh;
     return named_surface(ref)->mesh();
   }
 
@@ -640,6 +661,9 @@ class Pipeline {
     }
     if (!conds.empty()) {
       auto r = bind_constraints(m, conds);
+      const ConstraintCheck check = check_constraints(m, conds, spec_.boundary, r);
+      if (!check.error.empty()) throw ConfigError(spec_.file.string(), check.field, check.error);
+      for (const auto& w : check.warnings) warn(w);
       m.rigid_nodes = std::move(r.rigid);
       m.sliding = std::move(r.sliding);
       for (std::size_t i = 0; i < conds.size(); ++i) {
