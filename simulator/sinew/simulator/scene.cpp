@@ -656,6 +656,9 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
   std::vector<Index> rigid = model.rigid_nodes;
   for (const auto& bc : scene.boundary) {
     const auto nodes = resolve_node_set(scene, model, bc.set, bc.key + ".set");
+    const auto label = [&](const char* what) {
+      return fmt::format("{} ({} of set '{}')", bc.key, what, bc.set);
+    };
     switch (bc.kind) {
       case SceneBoundary::Kind::fixed:
         if (bc.components[0] && bc.components[1] && bc.components[2]) {
@@ -669,12 +672,13 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
             plane.nodes = nodes;
             plane.normal = {0, 0, 0};
             plane.normal[k] = 1;
+            plane.label = label("fixed component");
             s.sliding_planes.push_back(std::move(plane));
           }
         }
         break;
       case SceneBoundary::Kind::plane:
-        s.sliding_planes.push_back({nodes, bc.normal});
+        s.sliding_planes.push_back({nodes, bc.normal, label("plane")});
         break;
       case SceneBoundary::Kind::displacement: {
         PrescribedDisplacement p;
@@ -682,6 +686,7 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
         p.components = bc.components;
         p.value = bc.value;
         if (bc.curve) p.curve = bc.curve->curve;
+        p.label = label("displacement");
         s.prescribed.push_back(std::move(p));
         break;
       }
@@ -691,6 +696,7 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
         const double n = bc.per_node ? static_cast<double>(nodes.size()) : 1.0;
         f.total = {bc.value[0] * n, bc.value[1] * n, bc.value[2] * n};
         if (bc.curve) f.curve = bc.curve->curve;
+        f.label = label("force");
         s.forces.push_back(std::move(f));
         break;
       }
