@@ -230,7 +230,7 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   if (!root.is_map()) throw root.error("the spec must be a YAML map");
   root.allow_keys({"units", "output", "resolution", "weld_tolerance", "outer", "inner",
                    "tissue_thickness", "glide_depth", "layers", "materials", "muscles", "tendons",
-                   "regions", "boundary", "node_sets", "visual"});
+                   "regions", "boundary", "node_sets", "crop", "visual"});
   Spec spec;
   spec.file = file;
   if (root.has("units")) r.units = SpecReader::unit(root.child("units"));
@@ -461,6 +461,27 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
     spec.boundary.push_back(std::move(b));
   }
 
+  if (root.has("crop")) {
+    const auto n = root.child("crop");
+    n.allow_keys({"box", "points", "distance"});
+    CropSpec c;
+    c.field = n.path();
+    if (n.has("box")) c.box = r.box(n.child("box"));
+    if (n.has("points")) {
+      const auto pts = n.child("points");
+      if (!pts.is_map() || pts.keys().empty())
+        throw pts.error("expected a map of NAME: [x, y, z] (at least one)");
+      for (const auto& name : pts.keys())
+        c.points.emplace_back(name, SpecReader::vec3(pts.child(name), metres_per_unit(r.units)));
+      if (!n.has("distance")) throw n.error("points need a distance (keep voxels within it)");
+      c.distance = r.length(n.child("distance"));
+    } else if (n.has("distance")) {
+      throw n.child("distance").error("a distance needs points");
+    }
+    if (!c.box && c.points.empty()) throw n.error("give a box, points with a distance, or both");
+    spec.crop = std::move(c);
+  }
+
   for (const auto& e : root.child("node_sets").items()) {
     NodeSetSpec s;
     s.select = r.selector(e, true);
@@ -579,6 +600,13 @@ std::string spec_to_json(const Spec& spec) {
     if (b.within) bj["within"] = *b.within;
     if (b.box) bj["box"] = box_json(*b.box);
     j["boundary"].push_back(bj);
+  }
+  if (spec.crop) {
+    nlohmann::json cj;
+    if (spec.crop->box) cj["box"] = box_json(*spec.crop->box);
+    for (const auto& [name, p] : spec.crop->points) cj["points"][name] = {p.x, p.y, p.z};
+    if (!spec.crop->points.empty()) cj["distance"] = spec.crop->distance;
+    j["crop"] = cj;
   }
   for (const auto& s : spec.node_sets) {
     j["node_sets"].push_back({{"name", s.name}, {"select", selector_json(s.select)}});

@@ -113,6 +113,16 @@ struct BoundarySpec {
   std::string field;
 };
 
+// The region of interest (crop.hpp): voxels whose centre lies in `box` (when given) and within
+// `distance` of at least one of `points` (when given; both must hold) are kept; the nodes on the
+// cut are held rigid. Lengths in m.
+struct CropSpec {
+  std::optional<Box> box;
+  std::vector<std::pair<std::string, Vec3d>> points;  // named points, m
+  double distance = 0;                                // m, with points
+  std::string field;
+};
+
 struct NodeSetSpec {
   std::string name;
   Selector select;
@@ -150,6 +160,7 @@ struct Spec {
   std::vector<RegionSpec> regions;
   std::vector<BoundarySpec> boundary;
   std::vector<NodeSetSpec> node_sets;
+  std::optional<CropSpec> crop;
   std::vector<VisualSpec> visual;  // default: [{name: skin, surface: outer}]
 
   const MaterialSpec* find_material(const std::string& name) const;

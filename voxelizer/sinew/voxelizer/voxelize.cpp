@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <deque>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -20,6 +21,7 @@
 #include "sinew/formats/sha256.hpp"
 #include "sinew/voxelizer/constraint_checks.hpp"
 #include "sinew/voxelizer/constraints.hpp"
+#include "sinew/voxelizer/crop.hpp"
 #include "sinew/voxelizer/embedding.hpp"
 #include "sinew/voxelizer/fibres.hpp"
 #include "sinew/voxelizer/fractions.hpp"
@@ -171,6 +173,7 @@ class Pipeline {
   std::vector<LoadedMesh> muscles_, tendons_;
   std::vector<std::optional<LoadedMesh>> regions_;
   std::map<std::string, LoadedMesh> extra_;  // meshes referenced by field path
+  std::deque<TriangleMesh> cropped_;         // visual surfaces cut to the crop region
   std::vector<std::string> input_files_;
 
   FractionProblem problem_;
@@ -373,7 +376,9 @@ class Pipeline {
 
   void estimate_memory() {
     auto& s = result_.summary;
-    const auto& b = outer_.field->bounds();
+    const BoundingBox b =
+        spec_.crop ? crop_bounds(*spec_.crop, outer_.field->bounds(), spec_.file.string())
+                   : outer_.field->bounds();
     double nvox = 1;
     for (int d = 0; d < 3; ++d) {
       const double n = std::ceil((b.hi[d] - b.lo[d]) / h_) + 1;
@@ -481,6 +486,8 @@ class Pipeline {
     fractions_ = compute_fractions(p, [&](std::int64_t done, std::int64_t) { bar.update(done); });
     bar.finish();
     result_.summary.field_evaluations = fractions_.field_evaluations;
+    if (spec_.crop)
+      result_.summary.cropped_voxels = crop_fractions(fractions_, p.grid, *spec_.crop);
     if (fractions_.voxels.empty()) {
       throw GeometryError(spec_.outer.describe(), "outer",
                           "no tissue at this resolution (voxel size " + std::to_string(h_) +
@@ -670,6 +677,7 @@ class Pipeline {
         if (r.per_condition[i] == 0) warn(spec_.boundary[i].field + ": selects no node");
       }
     }
+    if (spec_.crop) hold_the_cut();
     s.rigid_nodes = static_cast<std::int64_t>(m.rigid_nodes.size());
     s.sliding_nodes = static_cast<std::int64_t>(m.sliding.size());
     for (const auto& ns : spec_.node_sets) {
@@ -681,11 +689,30 @@ class Pipeline {
     }
   }
 
+  // The nodes on the crop's cut are held rigid, whatever the boundary conditions bound them to.
+  void hold_the_cut() {
+    auto& m = result_.model;
+    const auto cut = cut_nodes(m, *spec_.crop);
+    result_.summary.cut_nodes = static_cast<std::int64_t>(cut.size());
+    std::vector<formats::Index> rigid;
+    std::set_union(m.rigid_nodes.begin(), m.rigid_nodes.end(), cut.begin(), cut.end(),
+                   std::back_inserter(rigid));
+    m.rigid_nodes = std::move(rigid);
+    std::erase_if(m.sliding, [&](const formats::SlidingBinding& b) {
+      return std::binary_search(cut.begin(), cut.end(), b.node);
+    });
+  }
+
   void surfaces() {
     auto& m = result_.model;
     auto& s = result_.summary;
     for (const auto& v : spec_.visual) {
-      const TriangleMesh& mesh = named_mesh(v.surface);
+      const TriangleMesh& mesh =
+          spec_.crop ? cropped_.emplace_back(crop_mesh(named_mesh(v.surface), *spec_.crop))
+                     : named_mesh(v.surface);
+      if (mesh.triangles.empty())
+        throw GeometryError(spec_.file.string(), v.surface.field,
+                            "visual surface " + v.name + " has no triangle inside the crop region");
       formats::Surface surf;
       surf.name = v.name;
       surf.role = formats::SurfaceRole::visual;
@@ -750,6 +777,8 @@ std::string summary_json(const Summary& s) {
   for (const auto& v : s.muscle_volumes) j["muscle_volumes_m3"][v.name] = v.volume;
   j["rigid_nodes"] = s.rigid_nodes;
   j["sliding_nodes"] = s.sliding_nodes;
+  j["cropped_voxels"] = s.cropped_voxels;
+  j["cut_nodes"] = s.cut_nodes;
   for (const auto& [n, c] : s.node_sets) j["node_sets"][n] = c;
   for (const auto& m : s.meshes) {
     const auto& d = m.diagnostics;
@@ -806,6 +835,9 @@ std::string summary_text(const Summary& s) {
   }
   line("rigid nodes    %lld", static_cast<long long>(s.rigid_nodes));
   line("sliding nodes  %lld", static_cast<long long>(s.sliding_nodes));
+  if (s.cut_nodes > 0)
+    line("cut nodes      %lld (on the crop's cut, held rigid)",
+         static_cast<long long>(s.cut_nodes));
   for (const auto& [n, c] : s.node_sets)
     line("  node set %-20s %lld nodes", n.c_str(), static_cast<long long>(c));
   o << "surfaces\n";

@@ -57,6 +57,8 @@ struct Summary {
   std::vector<NamedVolume> material_volumes;
   std::vector<NamedVolume> muscle_volumes;
   std::int64_t rigid_nodes = 0, sliding_nodes = 0;
+  std::int64_t cropped_voxels = 0;  // tissue voxels outside the crop region, dropped
+  std::int64_t cut_nodes = 0;       // nodes on the crop's cut, held rigid
   std::vector<std::pair<std::string, std::int64_t>> node_sets;
   std::vector<MeshReport> meshes;
   std::int64_t embedded_vertices = 0, embedding_outside = 0;
