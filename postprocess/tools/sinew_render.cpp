@@ -94,6 +94,9 @@ int main(int argc, char** argv) {
                                 colormap = "viridis", size = "800x600", output, sequence, sheet,
                                 gif, mp4;
   int frame = -1, columns = 4, sheet_frames = 8, fps = 12;
+  std::vector<double> target;
+  std::vector<int> crop_box;
+  double zoom = 1.0;
   bool all = false;
   add_results_options(app, results, surface);
   auto* frame_opt = app.add_option("--frame", frame, "Frame index to draw (default: the last)")
@@ -107,6 +110,13 @@ int main(int argc, char** argv) {
   app.add_option("--colormap", colormap, "Colour map: viridis or blue-red")
       ->check(CLI::IsMember({"viridis", "blue-red"}));
   app.add_option("--size", size, "Image size WxH in pixels");
+  app.add_option("--target", target, "Point X,Y,Z (m) the camera looks at (default: the centre)")
+      ->expected(3)
+      ->delimiter(',');
+  app.add_option("--zoom", zoom, "Move the camera this many times closer to its target (> 0)");
+  app.add_option("--crop", crop_box, "Keep the X,Y,W,H pixels of the --size image")
+      ->expected(4)
+      ->delimiter(',');
   app.add_option("-o,--output", output, "PNG of one frame");
   app.add_option("--sequence", sequence, "Folder for one PNG per frame (frame_0000.png, ...)");
   app.add_option("--contact-sheet", sheet, "PNG with several frames tiled and labelled");
@@ -152,6 +162,10 @@ int main(int argc, char** argv) {
     s.up = parse_up_axis(up);
     s.color_displacement = color == "displacement";
     s.map = parse_color_map(colormap);
+    if (!target.empty()) s.target = Point{target[0], target[1], target[2]};
+    s.zoom = zoom;
+    if (!crop_box.empty())
+      s.crop = std::array<int, 4>{crop_box[0], crop_box[1], crop_box[2], crop_box[3]};
     const auto anim = read_surface(results, surface);
     const std::size_t frames = anim.frame_count();
     if (frame >= 0 && static_cast<std::size_t>(frame) >= frames) {

@@ -125,6 +125,18 @@ Rgb map_color(ColorMap map, double t) {
   return {lerp(0), lerp(1), lerp(2)};
 }
 
+Camera aim_camera(const Camera& camera, const std::optional<Point>& target, double zoom) {
+  if (!(zoom > 0) || !std::isfinite(zoom))
+    throw ConfigError("", "--zoom", fmt::format("{} is not a positive number", zoom));
+  Camera c = camera;
+  if (target) c.target = *target;
+  for (int k = 0; k < 3; ++k) {
+    const auto i = std::size_t(k);
+    c.position[i] = c.target[i] + (camera.position[i] - camera.target[i]) / zoom;
+  }
+  return c;
+}
+
 Camera frame_view(const std::vector<float>& positions, View view, double aspect, UpAxis up,
                   double fov_y_deg) {
   Point lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),

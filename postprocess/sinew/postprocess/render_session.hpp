@@ -2,6 +2,8 @@
 // What sinew-render does with a surface animation, as library functions the tool and the tests
 // share: a fixed camera for all frames, the displacement colouring, frame captions, a frame
 // selection for contact sheets.
+#include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,11 @@ struct FrameRenderSettings {
   bool color_displacement = false;  // colour by |x_f − x_rest| (m, bar labelled in mm)
   ColorMap map = ColorMap::viridis;
   bool caption = true;  // "frame k  t=... s" at the bottom left
+  // The framed camera aimed at `target` (m) and dollied by `zoom` (aim_camera), and the image cut
+  // to `crop` = {x, y, w, h} pixels of the width × height render (crop()).
+  std::optional<Point> target;
+  double zoom = 1.0;
+  std::optional<std::array<int, 4>> crop;
 };
 
 // Renders frame `frame` of `animation` with a camera framing the bounding box of all frames
