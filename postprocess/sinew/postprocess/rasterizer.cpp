@@ -137,6 +137,21 @@ Camera aim_camera(const Camera& camera, const std::optional<Point>& target, doub
   return c;
 }
 
+bool project_point(const Camera& cam, int width, int height, const Point& p, double& px,
+                   double& py) {
+  const Point f = normalize(sub(cam.target, cam.position));
+  const Point r = normalize(cross(f, cam.up));
+  const Point u = cross(r, f);
+  const double ty = std::tan(cam.fov_y_deg * std::numbers::pi / 360.0);
+  const double tx = ty * static_cast<double>(width) / height;
+  const Point d = sub(p, cam.position);
+  const double x = dot(d, r), y = dot(d, u), z = dot(d, f);
+  if (!(z > 0)) return false;
+  px = (0.5 + x / (2 * z * tx)) * width;
+  py = (0.5 - y / (2 * z * ty)) * height;
+  return true;
+}
+
 Camera frame_view(const std::vector<float>& positions, View view, double aspect, UpAxis up,
                   double fov_y_deg) {
   Point lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),

@@ -59,6 +59,11 @@ Camera frame_view(const std::vector<float>& positions, View view, double aspect,
 // the limit r ≪ d). Throws ConfigError (field "--zoom") for a zoom that is not a positive number.
 Camera aim_camera(const Camera& camera, const std::optional<Point>& target, double zoom);
 
+// The pixel (px, py) of point p in a width × height viewport through `camera` (the formula at the
+// top); false when p lies behind the camera (z_c ≤ 0).
+bool project_point(const Camera& camera, int width, int height, const Point& p, double& px,
+                   double& py);
+
 enum class ColorMap { viridis, blue_red };
 ColorMap parse_color_map(const std::string& text, const std::string& field = "--colormap");
 // The colour of t ∈ [0, 1] (clamped): viridis (matplotlib's, 9 samples, linear between them) or
