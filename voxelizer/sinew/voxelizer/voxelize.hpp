@@ -83,7 +83,10 @@ VoxelizeResult voxelize(const Spec& spec, const VoxelizeOptions& options = {});
 // Loads one mesh source (file or primitive) in metres, without cleaning.
 TriangleMesh load_mesh_source(const MeshSource& source);
 
-// The summary for people (several lines) and as one JSON document.
+// "1.50 GiB" or "12.3 MiB": how the summary and the memory error print a size in bytes.
+std::string format_bytes(double bytes);
+
+// The summary for people (several lines) and as one JSON document (summary_output.cpp).
 std::string summary_text(const Summary& s);
 std::string summary_json(const Summary& s);
 
