@@ -145,6 +145,16 @@ int main(int argc, char** argv) {
 
   const sinew::tool::ExitCodes codes{.config = sinew::tool::kExitUsage};
   return sinew::tool::run("sinew-render", codes, [&] {
+    // The image options both kinds of file take.
+    auto set_view = [&](ViewSettings& v) {
+      parse_size(size, v.width, v.height);
+      v.view = parse_view(view);
+      v.up = parse_up_axis(up);
+      if (!target.empty()) v.target = Point{target[0], target[1], target[2]};
+      v.zoom = zoom;
+      if (!crop_box.empty())
+        v.crop = std::array<int, 4>{crop_box[0], crop_box[1], crop_box[2], crop_box[3]};
+    };
     if (is_model_file(results)) {
       // A model before any run: its muscles and fibres under a translucent skin.
       if (output.empty() || !sequence.empty() || !sheet.empty() || !gif.empty() || !mp4.empty() ||
@@ -155,15 +165,9 @@ int main(int argc, char** argv) {
                           "--no-fibres, --seed-spacing)");
       }
       PreviewSettings ps;
-      parse_size(size, ps.width, ps.height);
-      ps.view = parse_view(view);
-      ps.up = parse_up_axis(up);
+      set_view(ps);
       ps.skin_opacity = skin_opacity;
       ps.fibres = !no_fibres;
-      if (!target.empty()) ps.target = Point{target[0], target[1], target[2]};
-      ps.zoom = zoom;
-      if (!crop_box.empty())
-        ps.crop = std::array<int, 4>{crop_box[0], crop_box[1], crop_box[2], crop_box[3]};
       const auto model = formats::read_model(results);
       const auto preview = make_model_preview(model, surface, seed_spacing);
       write_png(output, render_model_preview(preview, ps));
@@ -194,15 +198,9 @@ int main(int argc, char** argv) {
                           "elsewhere)");
     }
     FrameRenderSettings s;
-    parse_size(size, s.width, s.height);
-    s.view = parse_view(view);
-    s.up = parse_up_axis(up);
+    set_view(s);
     s.color_displacement = color == "displacement";
     s.map = parse_color_map(colormap);
-    if (!target.empty()) s.target = Point{target[0], target[1], target[2]};
-    s.zoom = zoom;
-    if (!crop_box.empty())
-      s.crop = std::array<int, 4>{crop_box[0], crop_box[1], crop_box[2], crop_box[3]};
     const auto anim = read_surface(results, surface);
     const std::size_t frames = anim.frame_count();
     if (frame >= 0 && static_cast<std::size_t>(frame) >= frames) {

@@ -16,16 +16,24 @@ std::string at_mm(const Point& p) {
   return fmt::format("({:.4g}, {:.4g}, {:.4g}) mm", p[0] * 1e3, p[1] * 1e3, p[2] * 1e3);
 }
 
-// Id of the element with base corner l, -1 when absent (element_lattice is sorted).
-Index element_at(const Model& m, const Lattice& l) {
-  const auto it =
-      std::lower_bound(m.element_lattice.begin(), m.element_lattice.end(), l, lattice_less);
-  return it != m.element_lattice.end() && *it == l ? Index(it - m.element_lattice.begin()) : -1;
+// Index of lattice point l in a sorted lattice list (elements by base corner, or nodes), -1 when
+// absent.
+Index find_lattice(const std::vector<Lattice>& list, const Lattice& l) {
+  const auto it = std::lower_bound(list.begin(), list.end(), l, lattice_less);
+  return it != list.end() && *it == l ? Index(it - list.begin()) : -1;
 }
 
-Index node_at(const Model& m, const Lattice& l) {
-  const auto it = std::lower_bound(m.node_lattice.begin(), m.node_lattice.end(), l, lattice_less);
-  return it != m.node_lattice.end() && *it == l ? Index(it - m.node_lattice.begin()) : -1;
+// "-x 4999, +x none, ...": the ids of l's 6 lattice neighbours in `list`.
+std::string neighbours_of(const std::vector<Lattice>& list, const Lattice& l) {
+  static constexpr const char* kDirection[6] = {"-x", "+x", "-y", "+y", "-z", "+z"};
+  std::vector<std::string> out;
+  for (int d = 0; d < 6; ++d) {
+    Lattice k = l;
+    k[std::size_t(d / 2)] += d % 2 ? 1 : -1;
+    const Index q = find_lattice(list, k);
+    out.push_back(fmt::format("{} {}", kDirection[d], q < 0 ? "none" : std::to_string(q)));
+  }
+  return fmt::format("{}", fmt::join(out, ", "));
 }
 
 // Signed height of p over triangle t of s along its outward normal, m (negative: behind it).
@@ -77,8 +85,6 @@ std::string list_or_none(const std::vector<std::string>& v) {
   return v.empty() ? "none" : fmt::format("{}", fmt::join(v, ", "));
 }
 
-constexpr const char* kDirection[6] = {"-x", "+x", "-y", "+y", "-z", "+z"};
-
 }  // namespace
 
 std::string describe_element(const Model& m, Index e, const std::string& file) {
@@ -122,14 +128,7 @@ std::string describe_element(const Model& m, Index e, const std::string& file) {
     out += fmt::format("    {} node {:<9} {}  {}\n", c, n, at_mm(m.node_position(n)),
                        constraint_of(m, n));
   }
-  std::vector<std::string> neighbours;
-  for (int d = 0; d < 6; ++d) {
-    Lattice k = l;
-    k[std::size_t(d / 2)] += d % 2 ? 1 : -1;
-    const Index f = element_at(m, k);
-    neighbours.push_back(fmt::format("{} {}", kDirection[d], f < 0 ? "none" : std::to_string(f)));
-  }
-  out += fmt::format("  neighbours   {}\n", fmt::join(neighbours, ", "));
+  out += fmt::format("  neighbours   {}\n", neighbours_of(m.element_lattice, l));
   out += fmt::format("  element sets {}\n", list_or_none(sets_with(m.element_sets, e)));
   std::vector<std::string> bound;
   for (const auto& s : m.surfaces) {
@@ -157,7 +156,7 @@ std::string describe_node(const Model& m, Index n, const std::string& file) {
     // The element whose corner c is this node has its base at l − offset(c).
     Lattice b = l;
     for (int k = 0; k < 3; ++k) b[std::size_t(k)] -= kHexCorner[std::size_t(c)][std::size_t(k)];
-    const Index e = element_at(m, b);
+    const Index e = find_lattice(m.element_lattice, b);
     if (e < 0) continue;
     std::string dominant = "-";
     double best = -1;
@@ -174,14 +173,7 @@ std::string describe_node(const Model& m, Index n, const std::string& file) {
     out += fmt::format("    {}: element {:<9} {} {:.4f}, muscles: {}\n", c, e, dominant, best,
                        list_or_none(muscles));
   }
-  std::vector<std::string> neighbours;
-  for (int d = 0; d < 6; ++d) {
-    Lattice k = l;
-    k[std::size_t(d / 2)] += d % 2 ? 1 : -1;
-    const Index q = node_at(m, k);
-    neighbours.push_back(fmt::format("{} {}", kDirection[d], q < 0 ? "none" : std::to_string(q)));
-  }
-  out += fmt::format("  neighbours   {}\n", fmt::join(neighbours, ", "));
+  out += fmt::format("  neighbours   {}\n", neighbours_of(m.node_lattice, l));
   return out;
 }
 

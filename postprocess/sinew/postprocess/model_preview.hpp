@@ -49,15 +49,10 @@ bool is_model_file(const std::string& path);
 ModelPreview make_model_preview(const formats::Model& model, const std::string& skin = "",
                                 int seed_spacing = 3, double min_fraction = 0.25);
 
-struct PreviewSettings {
-  int width = 800, height = 600;
-  View view = View::front;
-  UpAxis up = UpAxis::y;
+struct PreviewSettings : ViewSettings {
+  PreviewSettings() { view = View::front; }
   double skin_opacity = 0.35;  // in [0, 1]
   bool fibres = true;
-  std::optional<Point> target;  // aim_camera
-  double zoom = 1.0;
-  std::optional<std::array<int, 4>> crop;  // x, y, w, h pixels
 };
 
 inline constexpr Rgb kMuscleColor{178, 52, 44};

@@ -64,6 +64,18 @@ Camera aim_camera(const Camera& camera, const std::optional<Point>& target, doub
 bool project_point(const Camera& camera, int width, int height, const Point& p, double& px,
                    double& py);
 
+// What an image shows and how large, shared by results frames (FrameRenderSettings) and model
+// previews (PreviewSettings): size, automatic framing from a view, the camera aimed and zoomed
+// (aim_camera) and the image cut to `crop` = {x, y, w, h} pixels of the width × height render.
+struct ViewSettings {
+  int width = 800, height = 600;
+  View view = View::three_quarter;
+  UpAxis up = UpAxis::y;
+  std::optional<Point> target;  // m
+  double zoom = 1.0;
+  std::optional<std::array<int, 4>> crop;
+};
+
 enum class ColorMap { viridis, blue_red };
 ColorMap parse_color_map(const std::string& text, const std::string& field = "--colormap");
 // The colour of t ∈ [0, 1] (clamped): viridis (matplotlib's, 9 samples, linear between them) or

@@ -12,18 +12,10 @@
 
 namespace sinew::postprocess {
 
-struct FrameRenderSettings {
-  int width = 800, height = 600;
-  View view = View::three_quarter;
-  UpAxis up = UpAxis::y;
+struct FrameRenderSettings : ViewSettings {
   bool color_displacement = false;  // colour by |x_f − x_rest| (m, bar labelled in mm)
   ColorMap map = ColorMap::viridis;
   bool caption = true;  // "frame k  t=... s" at the bottom left
-  // The framed camera aimed at `target` (m) and dollied by `zoom` (aim_camera), and the image cut
-  // to `crop` = {x, y, w, h} pixels of the width × height render (crop()).
-  std::optional<Point> target;
-  double zoom = 1.0;
-  std::optional<std::array<int, 4>> crop;
 };
 
 // Renders frame `frame` of `animation` with a camera framing the bounding box of all frames
