@@ -214,7 +214,8 @@ void parse_node_sets(const YamlNode& c, Scene& scene) {
       set.kind = SceneNodeSet::Kind::box;
       const auto b = s.child("box");
       b.allow_keys({"min", "max"});
-      if (!b.has("min") || !b.has("max")) throw b.error("a box needs 'min' and 'max' corners (m)");
+      if (!b.has("min") || !b.has("max"))
+        throw b.error("a box needs 'min' and 'max' corners (lengths in the scene's units)");
       set.min = length3(b.child("min"), scene);
       set.max = length3(b.child("max"), scene);
       for (int i = 0; i < 3; ++i) {
@@ -227,7 +228,7 @@ void parse_node_sets(const YamlNode& c, Scene& scene) {
       const auto p = s.child("plane");
       p.allow_keys({"point", "normal"});
       if (!p.has("point") || !p.has("normal"))
-        throw p.error("a plane needs 'point' (m) and 'normal'");
+        throw p.error("a plane needs 'point' (a length in the scene's units) and 'normal'");
       set.point = length3(p.child("point"), scene);
       set.normal = unit_vec3(p.child("normal"));
       if (s.has("tolerance")) set.tolerance = s.child("tolerance").positive() * scene.length_unit;
@@ -281,8 +282,9 @@ void parse_boundary(const YamlNode& c, Scene& scene) {
     }
     if (bc.kind == SceneBoundary::Kind::displacement || bc.kind == SceneBoundary::Kind::force) {
       if (!b.has("value"))
-        throw b.error(bc.kind == SceneBoundary::Kind::force ? "needs 'value' [fx, fy, fz] (N)"
-                                                            : "needs 'value' [ux, uy, uz] (m)");
+        throw b.error(bc.kind == SceneBoundary::Kind::force
+                          ? "needs 'value' [fx, fy, fz] (N)"
+                          : "needs 'value' [ux, uy, uz] (lengths in the scene's units)");
       // A displacement is a length; a force stays in N.
       bc.value = bc.kind == SceneBoundary::Kind::force ? b.child("value").vec3()
                                                        : length3(b.child("value"), scene);
