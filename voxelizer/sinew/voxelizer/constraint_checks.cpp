@@ -71,13 +71,16 @@ ConstraintCheck check_constraints(const formats::Model& model,
     formats::Index deepest = -1;
     double depth = 0;  // m
   };
-  std::map<std::size_t, Behind> behind;
+  // Inside the surface (its own inside test: the pseudonormal or the winding number): an error.
+  // Behind the closest triangle but outside the surface (a misoriented or folded triangle of a
+  // messy mesh): a warning, the simulator's projection will still move these nodes through it.
+  std::map<std::size_t, Behind> behind, misoriented;
   for (const auto& s : bound.sliding) {
     const auto c = static_cast<std::size_t>(bound.condition[static_cast<std::size_t>(s.node)]);
-    const double height =
-        height_over(conditions[c].surface->mesh(), s.rest_triangle, position(model, s.node));
+    const Vec3d p = position(model, s.node);
+    const double height = height_over(conditions[c].surface->mesh(), s.rest_triangle, p);
     if (height >= -tol) continue;
-    auto& b = behind[c];
+    auto& b = conditions[c].surface->inside(p) ? behind[c] : misoriented[c];
     b.nodes.push_back(s.node);
     if (-height > b.depth) {
       b.depth = -height;
@@ -119,6 +122,16 @@ ConstraintCheck check_constraints(const formats::Model& model,
                          describe_condition(specs[it->first]), it->second.nodes.size());
     out.field = specs[c].field;
     out.error = msg;
+  }
+
+  for (const auto& [c, b] : misoriented) {
+    const auto p = position(model, b.deepest);
+    out.warnings.push_back(fmt::format(
+        "{}: {} nodes outside the surface lie behind the outward normal of their closest triangle "
+        "(misoriented or folded triangles), up to {} (node {} at ({:.4g}, {:.4g}, {:.4g}) mm); the "
+        "simulator's sliding projection will move them to the other side of that triangle",
+        describe_condition(specs[c]), b.nodes.size(), mm(b.depth), b.deepest, p.x * 1e3, p.y * 1e3,
+        p.z * 1e3));
   }
 
   // Elements with rigid corners next to sliding ones, per (rigid, sliding) pair of conditions.

@@ -5,7 +5,9 @@
 // lies behind the surface (inside the skull, say) is moved out through it, by twice its depth, at
 // the first step, and the elements around it invert. So:
 //  - error: a sliding condition binds nodes that lie behind their surface at rest (behind the
-//    outward normal of their closest triangle, the simulator's test, by more than 1e-6 h). The
+//    outward normal of their closest triangle, the simulator's test, by more than 1e-6 h, and
+//    inside the surface by its own inside test; behind a triangle but outside the surface — a
+//    misoriented or folded triangle of a messy mesh — is a warning with the count). The
 //    message names the condition, the count, the deepest node and its depth, and every later
 //    rigid condition that would have held those nodes (a sliding condition listed before
 //    `rigid inside`);
