@@ -309,13 +309,17 @@ void BackendCore::fail_displacement(std::int64_t step, Index node) const {
     throw InstabilityError("", "simulation",
                            fmt::format("non-finite displacement at step {}", step));
   const auto& p = prepared_.rest[std::size_t(node)];
+  const NodeConstraints held = node_constraints(prepared_, setup_, model_rigid_, node);
+  std::string constraints;
+  for (const auto& item : held.items) constraints += (constraints.empty() ? "" : ", ") + item;
   throw InstabilityError(
       "", "simulation",
       fmt::format("non-finite displacement (NaN/Inf) at step {}, t = {:.6g} s: "
-                  "node {} (rest position ({:.6g}, {:.6g}, {:.6g}) m); "
+                  "node {} (rest position ({:.6g}, {:.6g}, {:.6g}) m{}); "
                   "Δt = {:.6g} s. Lower the time step (or its safety factor), or check "
                   "the loads",
-                  step, time(step), node, p[0], p[1], p[2], dt()))
+                  step, time(step), node, p[0], p[1], p[2],
+                  constraints.empty() ? "" : ", " + constraints, dt()))
       .at(std::int64_t(node));
 }
 
