@@ -22,7 +22,9 @@
 #include "results_options.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/tool.hpp"
+#include "sinew/formats/model_file.hpp"
 #include "sinew/postprocess/contact_sheet.hpp"
+#include "sinew/postprocess/model_preview.hpp"
 #include "sinew/postprocess/png_writer.hpp"
 #include "sinew/postprocess/render_session.hpp"
 #include "sinew/postprocess/results_reader.hpp"
@@ -94,6 +96,11 @@ int main(int argc, char** argv) {
                                 colormap = "viridis", size = "800x600", output, sequence, sheet,
                                 gif, mp4;
   int frame = -1, columns = 4, sheet_frames = 8, fps = 12;
+  std::vector<double> target;
+  std::vector<int> crop_box;
+  double zoom = 1.0, skin_opacity = 0.35;
+  int seed_spacing = 3;
+  bool no_fibres = false;
   bool all = false;
   add_results_options(app, results, surface);
   auto* frame_opt = app.add_option("--frame", frame, "Frame index to draw (default: the last)")
@@ -107,7 +114,20 @@ int main(int argc, char** argv) {
   app.add_option("--colormap", colormap, "Colour map: viridis or blue-red")
       ->check(CLI::IsMember({"viridis", "blue-red"}));
   app.add_option("--size", size, "Image size WxH in pixels");
-  app.add_option("-o,--output", output, "PNG of one frame");
+  app.add_option("--target", target, "Point X,Y,Z (m) the camera looks at (default: the centre)")
+      ->expected(3)
+      ->delimiter(',');
+  app.add_option("--zoom", zoom, "Move the camera this many times closer to its target (> 0)");
+  app.add_option("--crop", crop_box, "Keep the X,Y,W,H pixels of the --size image")
+      ->expected(4)
+      ->delimiter(',');
+  app.add_option("-o,--output", output, "PNG of one frame (of a model file: its preview)");
+  app.add_option("--skin-opacity", skin_opacity,
+                 "Model preview: the skin's opacity over the muscles, 0 to 1 (0.35)");
+  app.add_option("--seed-spacing", seed_spacing,
+                 "Model preview: a fibre streamline every N muscle elements along each axis (3)")
+      ->check(CLI::PositiveNumber);
+  app.add_flag("--no-fibres", no_fibres, "Model preview: draw no fibre streamlines");
   app.add_option("--sequence", sequence, "Folder for one PNG per frame (frame_0000.png, ...)");
   app.add_option("--contact-sheet", sheet, "PNG with several frames tiled and labelled");
   app.add_option("--columns", columns, "Contact sheet columns")->check(CLI::PositiveNumber);
@@ -125,6 +145,37 @@ int main(int argc, char** argv) {
 
   const sinew::tool::ExitCodes codes{.config = sinew::tool::kExitUsage};
   return sinew::tool::run("sinew-render", codes, [&] {
+    // The image options both kinds of file take.
+    auto set_view = [&](ViewSettings& v) {
+      parse_size(size, v.width, v.height);
+      v.view = parse_view(view);
+      v.up = parse_up_axis(up);
+      if (!target.empty()) v.target = Point{target[0], target[1], target[2]};
+      v.zoom = zoom;
+      if (!crop_box.empty())
+        v.crop = std::array<int, 4>{crop_box[0], crop_box[1], crop_box[2], crop_box[3]};
+    };
+    if (is_model_file(results)) {
+      // A model before any run: its muscles and fibres under a translucent skin.
+      if (output.empty() || !sequence.empty() || !sheet.empty() || !gif.empty() || !mp4.empty() ||
+          frame >= 0 || all || color != "none") {
+        throw ConfigError(results, "command line",
+                          "this is a model file: it has no frames; draw its preview with -o "
+                          "OUT.png (--view, --target, --zoom, --crop, --skin-opacity, "
+                          "--no-fibres, --seed-spacing)");
+      }
+      PreviewSettings ps;
+      set_view(ps);
+      ps.skin_opacity = skin_opacity;
+      ps.fibres = !no_fibres;
+      const auto model = formats::read_model(results);
+      const auto preview = make_model_preview(model, surface, seed_spacing);
+      write_png(output, render_model_preview(preview, ps));
+      std::printf("%s: model preview: skin \"%s\", %zu muscles, %zu fibre streamlines; wrote %s\n",
+                  results.c_str(), preview.skin.name.c_str(), preview.muscles.size(),
+                  preview.streamlines.size(), output.c_str());
+      return sinew::tool::kExitOk;
+    }
     if (output.empty() && sequence.empty() && sheet.empty() && gif.empty() && mp4.empty()) {
       throw ConfigError("", "command line",
                         "nothing to draw: give -o, --sequence, --contact-sheet, --gif or --mp4");
@@ -147,9 +198,7 @@ int main(int argc, char** argv) {
                           "elsewhere)");
     }
     FrameRenderSettings s;
-    parse_size(size, s.width, s.height);
-    s.view = parse_view(view);
-    s.up = parse_up_axis(up);
+    set_view(s);
     s.color_displacement = color == "displacement";
     s.map = parse_color_map(colormap);
     const auto anim = read_surface(results, surface);

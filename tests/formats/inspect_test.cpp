@@ -59,6 +59,20 @@ TEST(Tools, GenerateThenInspect) {
   EXPECT_NEAR(j["muscles"][0]["volume"].get<double>(), 256e-9, 1e-15);
   EXPECT_EQ(j["rigid_nodes"], 81);
   EXPECT_EQ(j["provenance"]["parameters"]["layer_boundaries"][0], 0.0045);
+
+  // One element and one node (describe_test.cpp checks the text): element 0 is soft and rigid at
+  // its bottom corners; an id past the end exits 1 naming the file and the option.
+  const Result one = run(std::string(SINEW_INSPECT_EXE) + " " + model + " --element 0 --node 0");
+  ASSERT_EQ(one.status, 0) << one.err;
+  EXPECT_NE(one.out.find("element 0 of 512"), std::string::npos) << one.out;
+  EXPECT_NE(one.out.find("soft                 fraction 1.0000"), std::string::npos) << one.out;
+  EXPECT_NE(one.out.find("node 0 of 729"), std::string::npos) << one.out;
+  EXPECT_NE(one.out.find("constraint   rigid"), std::string::npos) << one.out;
+  const Result past = run(std::string(SINEW_INSPECT_EXE) + " " + model + " --element 512");
+  EXPECT_EQ(past.status, 1);
+  EXPECT_NE(past.err.find(model + ": --element: element 512 out of range [0, 512)"),
+            std::string::npos)
+      << past.err;
   std::filesystem::remove(model);
 }
 

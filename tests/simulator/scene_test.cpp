@@ -121,6 +121,51 @@ TEST(SceneParse, EveryKey) {
   EXPECT_EQ(s.probes[2].kind, SceneProbe::Kind::reaction);
 }
 
+// `units: mm`: the full scene written in millimetres reads to the same SI values as in metres —
+// every length (boxes, planes, tolerances, displacements, probe points), velocity and
+// acceleration converted, forces (N) and times (s) untouched.
+TEST(SceneParse, UnitsMillimetresConvertEveryLengthAtTheEdge) {
+  std::string mm = std::string("units: mm\n") + kFullScene;
+  const std::pair<const char*, const char*> edits[] = {
+      {"gravity: [0, -9.81, 0]", "gravity: [0, -9810, 0]"},
+      {"point: [0, 0, 0.04]", "point: [0, 0, 40]"},
+      {"tolerance: 1.0e-5", "tolerance: 1.0e-2"},
+      {"max: [0.01, 0.01, 0.01]", "max: [10, 10, 10]"},
+      {"value: [0, 0, -0.002]", "value: [0, 0, -2]"},
+      {"value: [0.1, 0, 0]", "value: [100, 0, 0]"},
+      {"point: [0.04, 0.04, 0.04]", "point: [40, 40, 40]"}};
+  for (const auto& [from, to] : edits) {
+    const auto at = mm.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    mm.replace(at, std::string(from).size(), to);
+  }
+  const auto si = parse_scene_text(kFullScene, "full.yaml", "");
+  const auto s = parse_scene_text(mm, "full_mm.yaml", "");
+  EXPECT_DOUBLE_EQ(s.length_unit, 1e-3);
+  auto same = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(a[std::size_t(k)], b[std::size_t(k)], 1e-15);
+  };
+  same(s.gravity, si.gravity);
+  same(s.node_sets[0].point, si.node_sets[0].point);
+  EXPECT_NEAR(*s.node_sets[0].tolerance, *si.node_sets[0].tolerance, 1e-18);
+  same(s.node_sets[1].min, si.node_sets[1].min);
+  same(s.node_sets[1].max, si.node_sets[1].max);
+  same(s.boundary[3].value, si.boundary[3].value);  // displacement, m
+  same(s.boundary[4].value, si.boundary[4].value);  // force, N: [1, 2, 3] in both
+  EXPECT_DOUBLE_EQ(s.boundary[4].value[2], 3.0);
+  same(s.initial_velocity[0].value, si.initial_velocity[0].value);
+  same(*s.probes[0].point, *si.probes[0].point);
+  EXPECT_DOUBLE_EQ(s.duration, si.duration);
+  EXPECT_DOUBLE_EQ(s.output.interval, si.output.interval);
+  try {
+    parse_scene_text("units: inch\nmodel: m.h5\neffects: [elasticity]\nduration: 1\n", "u.yaml",
+                     "");
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("u.yaml: units"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SceneParse, MinimalSceneHasDefaults) {
   const auto s =
       parse_scene_text("model: m.h5\neffects: [elasticity]\nduration: 1\n", "min.yaml", "");

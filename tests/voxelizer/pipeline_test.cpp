@@ -136,7 +136,7 @@ outer: {sphere: {radius: 8}, subdivisions: 4}
 tissue_thickness: 3
 materials: {preset: warburton2013}
 layers: [{material: dermis, thickness: 1}, {material: hypodermis}]
-boundary: [{type: sliding, within: 0.5}]
+boundary: [{type: rigid, inside: true}, {type: sliding, within: 0.5}]
 )",
                           "derived.yaml");
   const double mm3 = 1e-9;

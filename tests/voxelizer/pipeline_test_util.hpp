@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 #include <atomic>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -71,7 +72,10 @@ inline double material_volume(const Summary& s, const std::string& name) {
   return -1;
 }
 
+// ../shared/data/meshes next to the source tree, or $SINEW_SHARED_MESH_DIR when set (a worktree
+// whose parent has no shared/).
 inline std::filesystem::path shared_mesh_dir() {
+  if (const char* dir = std::getenv("SINEW_SHARED_MESH_DIR"); dir && *dir) return dir;
   return SINEW_SHARED_MESH_DIR;
 }
 

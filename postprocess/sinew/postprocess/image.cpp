@@ -4,6 +4,10 @@
 #include <array>
 #include <cctype>
 
+#include <fmt/format.h>
+
+#include "sinew/common/error.hpp"
+
 namespace sinew::postprocess {
 namespace {
 
@@ -133,6 +137,18 @@ void draw_text(Image& image, int x, int y, const std::string& text, Rgb color, i
       }
     }
   }
+}
+
+Image crop(const Image& image, int x, int y, int w, int h) {
+  if (w < 1 || h < 1 || x < 0 || y < 0 || x + w > image.width || y + h > image.height) {
+    throw ConfigError("", "--crop",
+                      fmt::format("{}x{} pixels at ({}, {}) do not fit in the {}x{} image", w, h, x,
+                                  y, image.width, image.height));
+  }
+  Image out(w, h);
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) out.set(c, r, image.at(x + c, y + r));
+  return out;
 }
 
 }  // namespace sinew::postprocess

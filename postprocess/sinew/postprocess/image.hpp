@@ -26,6 +26,10 @@ struct Image {
   void blit(const Image& src, int x, int y);
 };
 
+// The w × h pixels of `image` from column x, row y (top left). Throws ConfigError (field "--crop")
+// when the rectangle is empty or not inside the image.
+Image crop(const Image& image, int x, int y, int w, int h);
+
 // Glyphs are 5 × 7 cells with one cell of spacing, each cell `scale` × `scale` pixels.
 int text_width(const std::string& text, int scale);
 inline int text_height(int scale) {

@@ -125,6 +125,33 @@ Rgb map_color(ColorMap map, double t) {
   return {lerp(0), lerp(1), lerp(2)};
 }
 
+Camera aim_camera(const Camera& camera, const std::optional<Point>& target, double zoom) {
+  if (!(zoom > 0) || !std::isfinite(zoom))
+    throw ConfigError("", "--zoom", fmt::format("{} is not a positive number", zoom));
+  Camera c = camera;
+  if (target) c.target = *target;
+  for (int k = 0; k < 3; ++k) {
+    const auto i = std::size_t(k);
+    c.position[i] = c.target[i] + (camera.position[i] - camera.target[i]) / zoom;
+  }
+  return c;
+}
+
+bool project_point(const Camera& cam, int width, int height, const Point& p, double& px,
+                   double& py) {
+  const Point f = normalize(sub(cam.target, cam.position));
+  const Point r = normalize(cross(f, cam.up));
+  const Point u = cross(r, f);
+  const double ty = std::tan(cam.fov_y_deg * std::numbers::pi / 360.0);
+  const double tx = ty * static_cast<double>(width) / height;
+  const Point d = sub(p, cam.position);
+  const double x = dot(d, r), y = dot(d, u), z = dot(d, f);
+  if (!(z > 0)) return false;
+  px = (0.5 + x / (2 * z * tx)) * width;
+  py = (0.5 - y / (2 * z * ty)) * height;
+  return true;
+}
+
 Camera frame_view(const std::vector<float>& positions, View view, double aspect, UpAxis up,
                   double fov_y_deg) {
   Point lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),

@@ -18,6 +18,7 @@
 // `supersample` × the size and box-filtered down.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,31 @@ UpAxis parse_up_axis(const std::string& text, const std::string& field = "--up")
 // of both fields of view. `aspect` = viewport width / height.
 Camera frame_view(const std::vector<float>& positions, View view, double aspect,
                   UpAxis up = UpAxis::y, double fov_y_deg = 30.0);
+
+// The camera aimed at `target` (m, when given: moved by target − camera.target, so the view
+// direction and the distance are kept) and dollied towards it by `zoom` > 0:
+//   position' = target' + (position − target) / zoom.
+// A sphere of radius r at the target, seen from distance d, fills a disc of radius
+// (H/2) tan(asin(r/d)) / tan(fov_y/2) pixels, so its footprint grows about zoom² times (exactly in
+// the limit r ≪ d). Throws ConfigError (field "--zoom") for a zoom that is not a positive number.
+Camera aim_camera(const Camera& camera, const std::optional<Point>& target, double zoom);
+
+// The pixel (px, py) of point p in a width × height viewport through `camera` (the formula at the
+// top); false when p lies behind the camera (z_c ≤ 0).
+bool project_point(const Camera& camera, int width, int height, const Point& p, double& px,
+                   double& py);
+
+// What an image shows and how large, shared by results frames (FrameRenderSettings) and model
+// previews (PreviewSettings): size, automatic framing from a view, the camera aimed and zoomed
+// (aim_camera) and the image cut to `crop` = {x, y, w, h} pixels of the width × height render.
+struct ViewSettings {
+  int width = 800, height = 600;
+  View view = View::three_quarter;
+  UpAxis up = UpAxis::y;
+  std::optional<Point> target;  // m
+  double zoom = 1.0;
+  std::optional<std::array<int, 4>> crop;
+};
 
 enum class ColorMap { viridis, blue_red };
 ColorMap parse_color_map(const std::string& text, const std::string& field = "--colormap");

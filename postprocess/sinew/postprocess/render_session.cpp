@@ -30,7 +30,9 @@ FrameRenderer::FrameRenderer(const SurfaceAnimation& a, const FrameRenderSetting
     corners.push_back(c & 4 ? hi[2] : lo[2]);
   }
   const int strip = s.color_displacement ? color_bar_strip_width(s.width) : 0;
-  camera_ = frame_view(corners, s.view, static_cast<double>(s.width - strip) / s.height, s.up);
+  camera_ =
+      aim_camera(frame_view(corners, s.view, static_cast<double>(s.width - strip) / s.height, s.up),
+                 s.target, s.zoom);
   if (s.color_displacement) max_displacement_ = postprocess::max_displacement(a);
 }
 
@@ -51,7 +53,10 @@ Image FrameRenderer::render(std::size_t frame) const {
     o.coloring = &coloring;
   }
   if (settings_.caption) o.caption = frame_label(animation_, frame);
-  return postprocess::render(animation_.frames.at(frame), animation_.triangles, o);
+  Image image = postprocess::render(animation_.frames.at(frame), animation_.triangles, o);
+  if (!settings_.crop) return image;
+  const auto& c = *settings_.crop;
+  return crop(image, c[0], c[1], c[2], c[3]);
 }
 
 std::string frame_label(const SurfaceAnimation& a, std::size_t frame) {

@@ -2,6 +2,8 @@
 // What sinew-render does with a surface animation, as library functions the tool and the tests
 // share: a fixed camera for all frames, the displacement colouring, frame captions, a frame
 // selection for contact sheets.
+#include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,10 +12,7 @@
 
 namespace sinew::postprocess {
 
-struct FrameRenderSettings {
-  int width = 800, height = 600;
-  View view = View::three_quarter;
-  UpAxis up = UpAxis::y;
+struct FrameRenderSettings : ViewSettings {
   bool color_displacement = false;  // colour by |x_f − x_rest| (m, bar labelled in mm)
   ColorMap map = ColorMap::viridis;
   bool caption = true;  // "frame k  t=... s" at the bottom left

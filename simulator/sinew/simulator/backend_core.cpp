@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
+#include "sinew/simulator/constraint_report.hpp"
 #include "sinew/simulator/passes/cpu_for_each.hpp"
 #include "sinew/simulator/passes/effect_dispatch.hpp"
 #include "sinew/simulator/physics/hex8.hpp"
@@ -207,6 +208,7 @@ std::vector<Vec3<T>> unflatten(const std::vector<double>& flat) {
 BackendCore::BackendCore(const formats::Model& model, const Setup& setup, Plan plan)
     : setup_(setup), plan_(std::move(plan)) {
   prepared_ = prepare_model(model, setup, plan_);
+  model_rigid_ = model.rigid_nodes;
   muscle_count_ = model.muscles.size();
   const double eps = setup.precision == Precision::float32
                          ? double(std::numeric_limits<float>::epsilon())
@@ -272,14 +274,33 @@ bool BackendCore::blown_up(double kinetic, double strain_and_hourglass, double w
 void BackendCore::fail_element(std::int64_t step, Index element, double j) const {
   const auto& p = prepared_.rest[std::size_t(prepared_.element_nodes[std::size_t(element)][0])];
   const double hh = prepared_.h / 2;
+  bool behind = false;
+  const std::string held = element_constraints(prepared_, setup_, model_rigid_, element, behind);
+  // In the first steps only the constraints can have inverted it (constraint_report.hpp): name
+  // them instead of advising a smaller step, which would not help.
+  std::string advice;
+  if (!held.empty() && (step <= kConstraintBlameSteps || behind)) {
+    advice = fmt::format(
+        "Its corners' constraints: {}. {}: check the model's boundary conditions (sinew-inspect "
+        "MODEL --element {}; docs/voxelizer.md, \"Safe constraints\"); a smaller time step will "
+        "not help",
+        held,
+        behind ? "A sliding node lay behind its surface at rest"
+               : fmt::format("An element inverted within the first {} steps was inverted by its "
+                             "constraints",
+                             kConstraintBlameSteps),
+        element);
+  } else {
+    advice = "Lower the time step (or its safety factor), or check the loads";
+    if (!held.empty()) advice += ". Its corners' constraints: " + held;
+  }
   throw InstabilityError(
       "", "simulation",
       fmt::format(
           "{} at step {}, t = {:.6g} s: element {} (rest centre ({:.6g}, {:.6g}, {:.6g}) m) "
-          "has J = {:.6g}; Δt = {:.6g} s. Lower the time step (or its safety factor), "
-          "or check the loads",
+          "has J = {:.6g}; Δt = {:.6g} s. {}",
           std::isnan(j) ? "NaN deformation" : "inverted element (J ≤ 0)", step, time(step), element,
-          p[0] + hh, p[1] + hh, p[2] + hh, j, dt()))
+          p[0] + hh, p[1] + hh, p[2] + hh, j, dt(), advice))
       .at(element);
 }
 
@@ -288,13 +309,17 @@ void BackendCore::fail_displacement(std::int64_t step, Index node) const {
     throw InstabilityError("", "simulation",
                            fmt::format("non-finite displacement at step {}", step));
   const auto& p = prepared_.rest[std::size_t(node)];
+  const NodeConstraints held = node_constraints(prepared_, setup_, model_rigid_, node);
+  std::string constraints;
+  for (const auto& item : held.items) constraints += (constraints.empty() ? "" : ", ") + item;
   throw InstabilityError(
       "", "simulation",
       fmt::format("non-finite displacement (NaN/Inf) at step {}, t = {:.6g} s: "
-                  "node {} (rest position ({:.6g}, {:.6g}, {:.6g}) m); "
+                  "node {} (rest position ({:.6g}, {:.6g}, {:.6g}) m{}); "
                   "Δt = {:.6g} s. Lower the time step (or its safety factor), or check "
                   "the loads",
-                  step, time(step), node, p[0], p[1], p[2], dt()))
+                  step, time(step), node, p[0], p[1], p[2],
+                  constraints.empty() ? "" : ", " + constraints, dt()))
       .at(std::int64_t(node));
 }
 

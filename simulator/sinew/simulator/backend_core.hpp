@@ -132,7 +132,9 @@ class BackendCore {
   bool blown_up(double kinetic, double strain_and_hourglass, double work) const;
 
   // The messages: each throws InstabilityError naming step, time, the element or node, its rest
-  // position and what to do.
+  // position and what to do. fail_element names the constraints of the element's corners
+  // (constraint_report.hpp) and, in the first kConstraintBlameSteps steps or when a sliding corner
+  // lay behind its surface, blames them instead of the time step.
   [[noreturn]] void fail_element(std::int64_t step, Index element, double j) const;
   [[noreturn]] void fail_displacement(std::int64_t step, Index node) const;  // step: the new one
   [[noreturn]] void fail_blowup(std::int64_t step, double kinetic, double work, Index fastest,
@@ -189,6 +191,7 @@ class BackendCore {
   Setup setup_;
   Plan plan_;
   PreparedModel prepared_;
+  std::vector<Index> model_rigid_;  // the model's rigid nodes, for the stop messages
   std::size_t muscle_count_ = 0;
   // J, ε · volume · min modulus (the strain energy's round-off) + ½ · total mass · (ε · max |x| /
   // Δt)² (the kinetic energy of positions moving by their own round-off each step); docs/physics.md

@@ -126,6 +126,7 @@ PreparedModel prepare_model(const formats::Model& model, const Setup& setup, con
       if (l < 0) {
         const auto& s = model.surfaces[std::size_t(b.surface)];
         PreparedSurface surf;
+        surf.name = s.name;
         surf.vertices = s.vertices;
         for (const auto& t : s.triangles) {
           for (int c = 0; c < 3; ++c)

@@ -25,6 +25,7 @@ struct PreparedLoadSet {
 };
 
 struct PreparedSurface {
+  std::string name;                                    // the model surface's
   std::vector<std::array<double, 3>> vertices;         // m
   std::vector<std::array<std::int32_t, 3>> triangles;  // validated ids
   SurfaceGrid grid;                                    // built once

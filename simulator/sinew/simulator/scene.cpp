@@ -62,6 +62,14 @@ bool Scene::has(Effect e) const {
 
 namespace {
 
+// A length, or a vector of lengths (or of velocities or accelerations), in the scene's units,
+// returned in SI.
+std::array<double, 3> length3(const YamlNode& c, const Scene& scene) {
+  auto v = c.vec3();
+  for (double& x : v) x *= scene.length_unit;
+  return v;
+}
+
 std::array<double, 3> unit_vec3(const YamlNode& c) {
   auto v = c.vec3();
   const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
@@ -206,9 +214,10 @@ void parse_node_sets(const YamlNode& c, Scene& scene) {
       set.kind = SceneNodeSet::Kind::box;
       const auto b = s.child("box");
       b.allow_keys({"min", "max"});
-      if (!b.has("min") || !b.has("max")) throw b.error("a box needs 'min' and 'max' corners (m)");
-      set.min = b.child("min").vec3();
-      set.max = b.child("max").vec3();
+      if (!b.has("min") || !b.has("max"))
+        throw b.error("a box needs 'min' and 'max' corners (lengths in the scene's units)");
+      set.min = length3(b.child("min"), scene);
+      set.max = length3(b.child("max"), scene);
       for (int i = 0; i < 3; ++i) {
         if (set.min[static_cast<std::size_t>(i)] > set.max[static_cast<std::size_t>(i)]) {
           throw b.child("max").error(fmt::format("max is below min along {}", "xyz"[i]));
@@ -219,10 +228,10 @@ void parse_node_sets(const YamlNode& c, Scene& scene) {
       const auto p = s.child("plane");
       p.allow_keys({"point", "normal"});
       if (!p.has("point") || !p.has("normal"))
-        throw p.error("a plane needs 'point' (m) and 'normal'");
-      set.point = p.child("point").vec3();
+        throw p.error("a plane needs 'point' (a length in the scene's units) and 'normal'");
+      set.point = length3(p.child("point"), scene);
       set.normal = unit_vec3(p.child("normal"));
-      if (s.has("tolerance")) set.tolerance = s.child("tolerance").positive();
+      if (s.has("tolerance")) set.tolerance = s.child("tolerance").positive() * scene.length_unit;
     } else {
       set.kind = SceneNodeSet::Kind::nodes;
       const auto n = s.child("nodes");
@@ -273,9 +282,12 @@ void parse_boundary(const YamlNode& c, Scene& scene) {
     }
     if (bc.kind == SceneBoundary::Kind::displacement || bc.kind == SceneBoundary::Kind::force) {
       if (!b.has("value"))
-        throw b.error(bc.kind == SceneBoundary::Kind::force ? "needs 'value' [fx, fy, fz] (N)"
-                                                            : "needs 'value' [ux, uy, uz] (m)");
-      bc.value = b.child("value").vec3();
+        throw b.error(bc.kind == SceneBoundary::Kind::force
+                          ? "needs 'value' [fx, fy, fz] (N)"
+                          : "needs 'value' [ux, uy, uz] (lengths in the scene's units)");
+      // A displacement is a length; a force stays in N.
+      bc.value = bc.kind == SceneBoundary::Kind::force ? b.child("value").vec3()
+                                                       : length3(b.child("value"), scene);
       if (b.has("curve")) bc.curve = parse_curve(b.child("curve"));
       if (!scene.has(Effect::loads)) {
         throw b.error("prescribed displacements and forces need the 'loads' effect in 'effects'");
@@ -288,14 +300,15 @@ void parse_boundary(const YamlNode& c, Scene& scene) {
 
 void parse_initial_velocity(const YamlNode& c, Scene& scene) {
   if (c.is_sequence() && c.size() == 3 && c.item(0).is_scalar()) {
-    scene.initial_velocity.push_back({"all", c.vec3(), c.path()});
+    scene.initial_velocity.push_back({"all", length3(c, scene), c.path()});
     return;
   }
   for (const auto& v : c.items()) {
     v.allow_keys({"set", "value"});
     if (!v.has("set") || !v.has("value"))
       throw v.error("needs 'set' and 'value' [vx, vy, vz] (m/s)");
-    scene.initial_velocity.push_back({v.child("set").text(), v.child("value").vec3(), v.path()});
+    scene.initial_velocity.push_back(
+        {v.child("set").text(), length3(v.child("value"), scene), v.path()});
   }
 }
 
@@ -338,7 +351,7 @@ void parse_probes(const YamlNode& c, Scene& scene) {
         probe.node = p.child("node").integer();
         if (*probe.node < 0) throw p.child("node").error("node ids are >= 0");
       } else {
-        probe.point = p.child("point").vec3();
+        probe.point = length3(p.child("point"), scene);
       }
     } else {
       p.allow_keys({"name", "type", "set"});
@@ -359,11 +372,15 @@ Scene parse_scene_text(const std::string& text, const std::string& file,
   const YamlNode c = parse_yaml(text, file);
   if (!c.is_map())
     throw ConfigError(file, "", "a scene is a mapping of keys (model:, effects:, duration:, ...)");
-  c.allow_keys({"title", "model", "effects", "duration", "time_step", "damping", "mass_scaling",
-                "time_scaling", "hourglass", "precision", "gravity", "muscles", "node_sets",
-                "boundary_conditions", "initial_velocity", "output", "probes"});
+  c.allow_keys({"title", "units", "model", "effects", "duration", "time_step", "damping",
+                "mass_scaling", "time_scaling", "hourglass", "precision", "gravity", "muscles",
+                "node_sets", "boundary_conditions", "initial_velocity", "output", "probes"});
 
   if (c.has("title")) scene.title = c.child("title").text();
+  if (c.has("units")) {
+    scene.length_unit = c.child("units").choose(
+        NameTable<double, 3>{{{"m", 1.0}, {"cm", 1e-2}, {"mm", 1e-3}}}, "units");
+  }
   if (!c.has("model"))
     throw ConfigError(file, "model", "missing: the model file (path relative to the scene file)");
   scene.model = c.child("model").text();
@@ -434,7 +451,7 @@ Scene parse_scene_text(const std::string& text, const std::string& file,
   if (c.has("gravity")) {
     if (!scene.has(Effect::gravity))
       throw c.child("gravity").error("'gravity' is given but 'gravity' is not in effects");
-    scene.gravity = c.child("gravity").vec3();
+    scene.gravity = length3(c.child("gravity"), scene);
   }
   if (c.has("muscles")) {
     const auto m = c.child("muscles");
@@ -656,6 +673,9 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
   std::vector<Index> rigid = model.rigid_nodes;
   for (const auto& bc : scene.boundary) {
     const auto nodes = resolve_node_set(scene, model, bc.set, bc.key + ".set");
+    const auto label = [&](const char* what) {
+      return fmt::format("{} ({} of set '{}')", bc.key, what, bc.set);
+    };
     switch (bc.kind) {
       case SceneBoundary::Kind::fixed:
         if (bc.components[0] && bc.components[1] && bc.components[2]) {
@@ -669,12 +689,13 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
             plane.nodes = nodes;
             plane.normal = {0, 0, 0};
             plane.normal[k] = 1;
+            plane.label = label("fixed component");
             s.sliding_planes.push_back(std::move(plane));
           }
         }
         break;
       case SceneBoundary::Kind::plane:
-        s.sliding_planes.push_back({nodes, bc.normal});
+        s.sliding_planes.push_back({nodes, bc.normal, label("plane")});
         break;
       case SceneBoundary::Kind::displacement: {
         PrescribedDisplacement p;
@@ -682,6 +703,7 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
         p.components = bc.components;
         p.value = bc.value;
         if (bc.curve) p.curve = bc.curve->curve;
+        p.label = label("displacement");
         s.prescribed.push_back(std::move(p));
         break;
       }
@@ -691,6 +713,7 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
         const double n = bc.per_node ? static_cast<double>(nodes.size()) : 1.0;
         f.total = {bc.value[0] * n, bc.value[1] * n, bc.value[2] * n};
         if (bc.curve) f.curve = bc.curve->curve;
+        f.label = label("force");
         s.forces.push_back(std::move(f));
         break;
       }

@@ -117,6 +117,11 @@ struct Scene {
   std::string model;       // path as written
   std::string model_path;  // resolved against the scene's folder
   std::string title;
+  // `units:` m (default), cm or mm: metres per scene length unit. Every length read from the scene
+  // (node-set boxes, planes and tolerances, prescribed displacements, probe points) and every
+  // velocity and acceleration (initial velocities, gravity) is converted to SI on reading with it;
+  // forces stay in N, times in s. The fields below are SI.
+  double length_unit = 1;
 
   std::vector<Effect> effects;
   double duration = 0;  // s

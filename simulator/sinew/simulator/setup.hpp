@@ -10,6 +10,7 @@
 // An effect that is off allocates and computes nothing (see Plan::explain()).
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "sinew/formats/model.hpp"
@@ -66,6 +67,7 @@ struct PrescribedDisplacement {
   std::array<bool, 3> components{true, true, true};
   Vec3d value{0, 0, 0};  // m, the displacement where the curve is 1
   Curve curve;           // empty: constant 1
+  std::string label{};   // how stop messages name it, e.g. "boundary[2] (displacement of 'top')"
 };
 
 // External force on a node set: every node gets (total / nodes.size()) · curve(t).
@@ -73,6 +75,7 @@ struct NodalForce {
   std::vector<Index> nodes;
   Vec3d total{0, 0, 0};  // N, total over the set where the curve is 1
   Curve curve;           // empty: constant 1
+  std::string label{};   // how stop messages name it
 };
 
 // Symmetry condition: each node stays on the plane through its REST position with this normal
@@ -80,6 +83,7 @@ struct NodalForce {
 struct SlidingPlane {
   std::vector<Index> nodes;
   Vec3d normal{1, 0, 0};  // need not be unit; normalised by the engine
+  std::string label{};    // how stop messages name it
 };
 
 struct InitialVelocity {

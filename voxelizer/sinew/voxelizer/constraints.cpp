@@ -57,6 +57,13 @@ NodeBlocks group_nodes(const formats::Model& model) {
 
 }  // namespace
 
+bool condition_selects(const BoundaryCondition& cond, const Vec3d& p) {
+  if (cond.box && !cond.box->contains(p)) return false;
+  if (!cond.surface) return true;
+  if (cond.inside && cond.surface->inside(p)) return true;
+  return cond.within && cond.surface->distance().distance(p) <= *cond.within;
+}
+
 ConstraintResult bind_constraints(const formats::Model& model,
                                   const std::vector<BoundaryCondition>& conditions) {
   const std::size_t nn = model.node_count();
@@ -149,6 +156,7 @@ ConstraintResult bind_constraints(const formats::Model& model,
   }
   ConstraintResult out;
   out.per_condition.assign(conditions.size(), 0);
+  out.condition.assign(which.begin(), which.end());
   for (std::size_t n = 0; n < nn; ++n) {
     const int c = which[n];
     if (c < 0) continue;

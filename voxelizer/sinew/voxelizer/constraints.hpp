@@ -31,7 +31,12 @@ struct ConstraintResult {
   std::vector<formats::Index> rigid;             // sorted, unique
   std::vector<formats::SlidingBinding> sliding;  // sorted by node
   std::vector<std::int64_t> per_condition;       // nodes bound by each condition
+  std::vector<std::int32_t> condition;           // per node: the condition binding it, -1 none
 };
+
+// Whether `cond` selects the node at p (m) on its own, ignoring earlier conditions: in its box
+// (when given) and inside its surface (with `inside`) or within `within` of it.
+bool condition_selects(const BoundaryCondition& cond, const Vec3d& p);
 
 // OpenMP over nodes; independent of the thread count.
 ConstraintResult bind_constraints(const formats::Model& model,

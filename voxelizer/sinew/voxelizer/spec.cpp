@@ -213,6 +213,7 @@ std::string list_of(const std::set<std::string>& names) {
 void check_surface_names(const Spec& spec) {
   std::set<std::string> known{"outer"};
   if (spec.inner || spec.tissue_thickness) known.insert("inner");
+  if (spec.glide_depth) known.insert("glide");
   for (const auto& m : spec.muscles) known.insert(m.name);
   for (const auto& t : spec.tendons)
     if (t.mesh) known.insert(t.name);
@@ -290,8 +291,8 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   const YamlNode root = parse_yaml(yaml_text, file.string());
   if (!root.is_map()) throw root.error("the spec must be a YAML map");
   root.allow_keys({"units", "output", "resolution", "weld_tolerance", "outer", "inner",
-                   "tissue_thickness", "layers", "materials", "muscles", "tendons", "regions",
-                   "boundary", "node_sets", "visual", "rig"});
+                   "tissue_thickness", "glide_depth", "layers", "materials", "muscles", "tendons",
+                   "regions", "boundary", "node_sets", "crop", "visual", "rig"});
   Spec spec;
   spec.file = file;
   if (root.has("units")) r.units = SpecReader::unit(root.child("units"));
@@ -335,6 +336,12 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
     spec.tissue_thickness = r.length(root.child("tissue_thickness"));
   if (spec.inner && spec.tissue_thickness) {
     throw root.child("tissue_thickness").error("give either inner or tissue_thickness, not both");
+  }
+  if (root.has("glide_depth")) {
+    const auto n = root.child("glide_depth");
+    spec.glide_depth = r.length(n);
+    if (!spec.inner && !spec.tissue_thickness)
+      throw n.error("a glide surface lies below the inner surface: give inner or tissue_thickness");
   }
 
   // Materials.
@@ -459,7 +466,7 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   read_regions("regions", true, spec.regions);
   {
     // Muscles, tendons and regions name surfaces: one name each, and not a reserved one.
-    std::set<std::string> names{"outer", "inner"};
+    std::set<std::string> names{"outer", "inner", "glide"};
     auto unique = [&](const char* key, const auto& list) {
       for (std::size_t i = 0; i < list.size(); ++i) {
         if (!names.insert(list[i].name).second) {
@@ -501,6 +508,27 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
       throw e.child("surface").error("a surface needs inside or within");
     }
     spec.boundary.push_back(std::move(b));
+  }
+
+  if (root.has("crop")) {
+    const auto n = root.child("crop");
+    n.allow_keys({"box", "points", "distance"});
+    CropSpec c;
+    c.field = n.path();
+    if (n.has("box")) c.box = r.box(n.child("box"));
+    if (n.has("points")) {
+      const auto pts = n.child("points");
+      if (!pts.is_map() || pts.keys().empty())
+        throw pts.error("expected a map of NAME: [x, y, z] (at least one)");
+      for (const auto& name : pts.keys())
+        c.points.emplace_back(name, SpecReader::vec3(pts.child(name), metres_per_unit(r.units)));
+      if (!n.has("distance")) throw n.error("points need a distance (keep voxels within it)");
+      c.distance = r.length(n.child("distance"));
+    } else if (n.has("distance")) {
+      throw n.child("distance").error("a distance needs points");
+    }
+    if (!c.box && c.points.empty()) throw n.error("give a box, points with a distance, or both");
+    spec.crop = std::move(c);
   }
 
   for (const auto& e : root.child("node_sets").items()) {
@@ -579,6 +607,7 @@ std::string spec_to_json(const Spec& spec) {
   j["outer"] = mesh_json(spec.outer);
   if (spec.inner) j["inner"] = mesh_json(*spec.inner);
   if (spec.tissue_thickness) j["tissue_thickness"] = *spec.tissue_thickness;
+  if (spec.glide_depth) j["glide_depth"] = *spec.glide_depth;
   for (const auto& l : spec.layers) {
     nlohmann::json lj{{"material", l.material}};
     if (l.thickness) lj["thickness"] = *l.thickness;
@@ -631,6 +660,13 @@ std::string spec_to_json(const Spec& spec) {
     if (b.within) bj["within"] = *b.within;
     if (b.box) bj["box"] = box_json(*b.box);
     j["boundary"].push_back(bj);
+  }
+  if (spec.crop) {
+    nlohmann::json cj;
+    if (spec.crop->box) cj["box"] = box_json(*spec.crop->box);
+    for (const auto& [name, p] : spec.crop->points) cj["points"][name] = {p.x, p.y, p.z};
+    if (!spec.crop->points.empty()) cj["distance"] = spec.crop->distance;
+    j["crop"] = cj;
   }
   for (const auto& s : spec.node_sets) {
     j["node_sets"].push_back({{"name", s.name}, {"select", selector_json(s.select)}});

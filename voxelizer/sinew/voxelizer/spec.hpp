@@ -122,6 +122,16 @@ struct BoundarySpec {
   std::string field;
 };
 
+// The region of interest (crop.hpp): voxels whose centre lies in `box` (when given) and within
+// `distance` of at least one of `points` (when given; both must hold) are kept; the nodes on the
+// cut are held rigid. Lengths in m.
+struct CropSpec {
+  std::optional<Box> box;
+  std::vector<std::pair<std::string, Vec3d>> points;  // named points, m
+  double distance = 0;                                // m, with points
+  std::string field;
+};
+
 struct NodeSetSpec {
   std::string name;
   Selector select;
@@ -147,6 +157,10 @@ struct Spec {
   MeshSource outer;
   std::optional<MeshSource> inner;
   std::optional<double> tissue_thickness;  // m, derive the inner surface from the outer one
+  // m: derive the glide surface "glide", this far below the inner surface (given or derived): the
+  // surface the deep layer slides on when the nodes of the voxels the skull cuts lie inside the
+  // skull (docs/voxelizer.md, "Safe constraints").
+  std::optional<double> glide_depth;
 
   std::vector<LayerSpec> layers;
   std::vector<MaterialSpec> materials;
@@ -155,6 +169,7 @@ struct Spec {
   std::vector<RegionSpec> regions;
   std::vector<BoundarySpec> boundary;
   std::vector<NodeSetSpec> node_sets;
+  std::optional<CropSpec> crop;
   std::vector<VisualSpec> visual;  // default: [{name: skin, surface: outer}]
   std::optional<RigSpec> rig;      // muscles built from landmarks (rig.hpp), added when voxelizing
 

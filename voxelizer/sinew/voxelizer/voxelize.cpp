@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <deque>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -18,7 +19,9 @@
 #include "sinew/common/version.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/formats/sha256.hpp"
+#include "sinew/voxelizer/constraint_checks.hpp"
 #include "sinew/voxelizer/constraints.hpp"
+#include "sinew/voxelizer/crop.hpp"
 #include "sinew/voxelizer/embedding.hpp"
 #include "sinew/voxelizer/fibres.hpp"
 #include "sinew/voxelizer/fractions.hpp"
@@ -119,16 +122,6 @@ formats::Point to_point(const Vec3d& v) {
   return {v.x, v.y, v.z};
 }
 
-std::string format_bytes(double b) {
-  char buf[64];
-  if (b >= 1024.0 * 1024 * 1024) {
-    std::snprintf(buf, sizeof buf, "%.2f GiB", b / (1024.0 * 1024 * 1024));
-  } else {
-    std::snprintf(buf, sizeof buf, "%.1f MiB", b / (1024.0 * 1024));
-  }
-  return buf;
-}
-
 class Pipeline {
  public:
   Pipeline(const Spec& spec, const VoxelizeOptions& options) : spec_(spec), options_(options) {}
@@ -170,9 +163,11 @@ class Pipeline {
 
   LoadedMesh outer_;
   std::optional<LoadedMesh> inner_;
+  std::optional<LoadedMesh> glide_;  // spec.glide_depth: the surface below the inner one
   std::vector<LoadedMesh> muscles_, tendons_;
   std::vector<std::optional<LoadedMesh>> regions_;
   std::map<std::string, LoadedMesh> extra_;  // meshes referenced by field path
+  std::deque<TriangleMesh> cropped_;         // visual surfaces cut to the crop region
   std::vector<std::string> input_files_;
 
   FractionProblem problem_;
@@ -305,6 +300,23 @@ class Pipeline {
       inner_ = std::move(lm);
     }
     if (inner_) make_field(*inner_);
+    if (spec_.glide_depth) {
+      // The glide surface lies glide_depth below the inner surface: an inward offset of the skin by
+      // tissue_thickness + glide_depth when the inner surface is derived (so it follows the skin
+      // as the derived skull does), else of the inner mesh itself.
+      const double d = *spec_.glide_depth;
+      const bool derived = spec_.tissue_thickness.has_value();
+      const double depth = derived ? *spec_.tissue_thickness + d : d;
+      LoadedMesh lm;
+      lm.mesh =
+          inward_offset_surface(derived ? outer_.mesh : inner_->mesh, depth, std::min(h_, d / 3));
+      lm.mesh.source = "offset of " + std::string(derived ? "outer" : "inner") + " by " +
+                       std::to_string(depth) + " m";
+      lm.diagnostics = clean_mesh(lm.mesh, 0.0);
+      result_.summary.meshes.push_back({"glide (derived)", lm.mesh.source, lm.diagnostics});
+      glide_ = std::move(lm);
+      make_field(*glide_);
+    }
     for (auto& m : muscles_) make_field(m);
     for (auto& m : tendons_) make_field(m);
     for (auto& m : regions_)
@@ -316,6 +328,7 @@ class Pipeline {
     if (ref.mesh) return extra_.at(ref.field).field.get();
     if (ref.name == "outer") return outer_.field.get();
     if (ref.name == "inner") return inner_ ? inner_->field.get() : nullptr;
+    if (ref.name == "glide") return glide_ ? glide_->field.get() : nullptr;
     for (std::size_t i = 0; i < spec_.muscles.size(); ++i)
       if (spec_.muscles[i].name == ref.name) return muscles_[i].field.get();
     for (std::size_t i = 0; i < spec_.tendons.size(); ++i)
@@ -329,6 +342,7 @@ class Pipeline {
     if (ref.mesh) return extra_.at(ref.field).mesh;
     if (ref.name == "outer") return outer_.mesh;
     if (ref.name == "inner") return inner_->mesh;
+    if (ref.name == "glide") return glide_->mesh;
     return named_surface(ref)->mesh();
   }
 
@@ -356,7 +370,9 @@ class Pipeline {
 
   void estimate_memory() {
     auto& s = result_.summary;
-    const auto& b = outer_.field->bounds();
+    const BoundingBox b =
+        spec_.crop ? crop_bounds(*spec_.crop, outer_.field->bounds(), spec_.file.string())
+                   : outer_.field->bounds();
     double nvox = 1;
     for (int d = 0; d < 3; ++d) {
       const double n = std::ceil((b.hi[d] - b.lo[d]) / h_) + 1;
@@ -464,6 +480,8 @@ class Pipeline {
     fractions_ = compute_fractions(p, [&](std::int64_t done, std::int64_t) { bar.update(done); });
     bar.finish();
     result_.summary.field_evaluations = fractions_.field_evaluations;
+    if (spec_.crop)
+      result_.summary.cropped_voxels = crop_fractions(fractions_, p.grid, *spec_.crop);
     if (fractions_.voxels.empty()) {
       throw GeometryError(spec_.outer.describe(), "outer",
                           "no tissue at this resolution (voxel size " + std::to_string(h_) +
@@ -654,12 +672,16 @@ class Pipeline {
     }
     if (!conds.empty()) {
       auto r = bind_constraints(m, conds);
+      const ConstraintCheck check = check_constraints(m, conds, spec_.boundary, r);
+      if (!check.error.empty()) throw ConfigError(spec_.file.string(), check.field, check.error);
+      for (const auto& w : check.warnings) warn(w);
       m.rigid_nodes = std::move(r.rigid);
       m.sliding = std::move(r.sliding);
       for (std::size_t i = 0; i < conds.size(); ++i) {
         if (r.per_condition[i] == 0) warn(spec_.boundary[i].field + ": selects no node");
       }
     }
+    if (spec_.crop) hold_the_cut();
     s.rigid_nodes = static_cast<std::int64_t>(m.rigid_nodes.size());
     s.sliding_nodes = static_cast<std::int64_t>(m.sliding.size());
     for (const auto& ns : spec_.node_sets) {
@@ -671,11 +693,30 @@ class Pipeline {
     }
   }
 
+  // The nodes on the crop's cut are held rigid, whatever the boundary conditions bound them to.
+  void hold_the_cut() {
+    auto& m = result_.model;
+    const auto cut = cut_nodes(m, *spec_.crop);
+    result_.summary.cut_nodes = static_cast<std::int64_t>(cut.size());
+    std::vector<formats::Index> rigid;
+    std::set_union(m.rigid_nodes.begin(), m.rigid_nodes.end(), cut.begin(), cut.end(),
+                   std::back_inserter(rigid));
+    m.rigid_nodes = std::move(rigid);
+    std::erase_if(m.sliding, [&](const formats::SlidingBinding& b) {
+      return std::binary_search(cut.begin(), cut.end(), b.node);
+    });
+  }
+
   void surfaces() {
     auto& m = result_.model;
     auto& s = result_.summary;
     for (const auto& v : spec_.visual) {
-      const TriangleMesh& mesh = named_mesh(v.surface);
+      const TriangleMesh& mesh =
+          spec_.crop ? cropped_.emplace_back(crop_mesh(named_mesh(v.surface), *spec_.crop))
+                     : named_mesh(v.surface);
+      if (mesh.triangles.empty())
+        throw GeometryError(spec_.file.string(), v.surface.field,
+                            "visual surface " + v.name + " has no triangle inside the crop region");
       formats::Surface surf;
       surf.name = v.name;
       surf.role = formats::SurfaceRole::visual;
@@ -732,113 +773,6 @@ VoxelizeResult voxelize(const Spec& spec, const VoxelizeOptions& options) {
     if (options.threads > 0) omp_set_num_threads(previous);
     throw;
   }
-}
-
-std::string summary_json(const Summary& s) {
-  nlohmann::json j;
-  j["output"] = s.output;
-  j["voxel_size_m"] = s.voxel_size;
-  j["dims"] = s.dims;
-  j["elements"] = s.elements;
-  j["nodes"] = s.nodes;
-  j["tissue_volume_m3"] = s.tissue_volume;
-  for (const auto& v : s.material_volumes) j["material_volumes_m3"][v.name] = v.volume;
-  for (const auto& v : s.muscle_volumes) j["muscle_volumes_m3"][v.name] = v.volume;
-  j["rigid_nodes"] = s.rigid_nodes;
-  j["sliding_nodes"] = s.sliding_nodes;
-  for (const auto& [n, c] : s.node_sets) j["node_sets"][n] = c;
-  for (const auto& m : s.meshes) {
-    const auto& d = m.diagnostics;
-    j["meshes"].push_back({{"role", m.role},
-                           {"source", m.source},
-                           {"vertices", d.vertices},
-                           {"triangles", d.triangles},
-                           {"duplicate_vertices_merged", d.duplicate_vertices_merged},
-                           {"degenerate_triangles_removed", d.degenerate_triangles_removed},
-                           {"duplicate_triangles_removed", d.duplicate_triangles_removed},
-                           {"boundary_edges", d.boundary_edges},
-                           {"non_manifold_edges", d.non_manifold_edges},
-                           {"components", d.components},
-                           {"inconsistently_oriented_edges", d.inconsistently_oriented_edges},
-                           {"closed", d.closed},
-                           {"area_m2", d.area},
-                           {"enclosed_volume_m3", d.enclosed_volume}});
-  }
-  j["embedding"] = {{"vertices", s.embedded_vertices},
-                    {"outside", s.embedding_outside},
-                    {"max_outside_distance_m", s.embedding_max_outside_distance}};
-  j["memory_estimate_bytes"] = s.memory_estimate_bytes;
-  j["memory_available_bytes"] = s.memory_available_bytes;
-  j["field_evaluations"] = s.field_evaluations;
-  j["threads"] = s.threads;
-  for (const auto& st : s.stages) {
-    j["stages"].push_back({{"name", st.name},
-                           {"seconds", st.seconds},
-                           {"cpu_seconds", st.cpu_seconds},
-                           {"peak_rss_bytes", st.peak_rss_bytes}});
-  }
-  j["warnings"] = s.warnings;
-  return j.dump(2);
-}
-
-std::string summary_text(const Summary& s) {
-  std::ostringstream o;
-  char buf[256];
-  auto line = [&](const char* fmt, auto... args) {
-    std::snprintf(buf, sizeof buf, fmt, args...);
-    o << buf << '\n';
-  };
-  if (!s.output.empty()) o << "model          " << s.output << '\n';
-  line("grid           %d x %d x %d voxels of %.6g mm", s.dims[0], s.dims[1], s.dims[2],
-       s.voxel_size * 1e3);
-  line("elements       %lld", static_cast<long long>(s.elements));
-  line("nodes          %lld", static_cast<long long>(s.nodes));
-  line("tissue volume  %.6g mm^3", s.tissue_volume * 1e9);
-  for (const auto& v : s.material_volumes) {
-    line("  material %-20s %14.6g mm^3", v.name.c_str(), v.volume * 1e9);
-  }
-  for (const auto& v : s.muscle_volumes) {
-    line("  muscle   %-20s %14.6g mm^3", v.name.c_str(), v.volume * 1e9);
-  }
-  line("rigid nodes    %lld", static_cast<long long>(s.rigid_nodes));
-  line("sliding nodes  %lld", static_cast<long long>(s.sliding_nodes));
-  for (const auto& [n, c] : s.node_sets)
-    line("  node set %-20s %lld nodes", n.c_str(), static_cast<long long>(c));
-  o << "surfaces\n";
-  for (const auto& m : s.meshes) {
-    const auto& d = m.diagnostics;
-    line("  %-22s %lld vertices, %lld triangles, %s, %lld components", m.role.c_str(),
-         static_cast<long long>(d.vertices), static_cast<long long>(d.triangles),
-         d.closed ? "closed" : "open", static_cast<long long>(d.components));
-    line(
-        "  %-22s merged %lld vertices, removed %lld degenerate; %lld boundary, %lld non-manifold, "
-        "%lld misoriented edges",
-        "", static_cast<long long>(d.duplicate_vertices_merged),
-        static_cast<long long>(d.degenerate_triangles_removed),
-        static_cast<long long>(d.boundary_edges), static_cast<long long>(d.non_manifold_edges),
-        static_cast<long long>(d.inconsistently_oriented_edges));
-    line("  %-22s area %.6g mm^2, enclosed volume %.6g mm^3 (%s)", "", d.area * 1e6,
-         d.enclosed_volume * 1e9, m.source.c_str());
-  }
-  line("embedding      %lld visual vertices, %lld outside every element",
-       static_cast<long long>(s.embedded_vertices), static_cast<long long>(s.embedding_outside));
-  line("memory         estimate %s, available %s", format_bytes(s.memory_estimate_bytes).c_str(),
-       format_bytes(s.memory_available_bytes).c_str());
-  line("stages         (%d threads, %lld field evaluations)", s.threads,
-       static_cast<long long>(s.field_evaluations));
-  double total = 0, cpu = 0;
-  for (const auto& st : s.stages) {
-    total += st.seconds;
-    cpu += st.cpu_seconds;
-    line("  %-12s %9.3f s  (cpu %8.3f s)   peak %s", st.name.c_str(), st.seconds, st.cpu_seconds,
-         format_bytes(st.peak_rss_bytes).c_str());
-  }
-  line("  %-12s %9.3f s  (cpu %8.3f s)", "total", total, cpu);
-  if (!s.warnings.empty()) {
-    o << "warnings\n";
-    for (const auto& w : s.warnings) o << "  " << w << '\n';
-  }
-  return o.str();
 }
 
 }  // namespace sinew::voxelizer

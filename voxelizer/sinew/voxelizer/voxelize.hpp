@@ -57,6 +57,8 @@ struct Summary {
   std::vector<NamedVolume> material_volumes;
   std::vector<NamedVolume> muscle_volumes;
   std::int64_t rigid_nodes = 0, sliding_nodes = 0;
+  std::int64_t cropped_voxels = 0;  // tissue voxels outside the crop region, dropped
+  std::int64_t cut_nodes = 0;       // nodes on the crop's cut, held rigid
   std::vector<std::pair<std::string, std::int64_t>> node_sets;
   std::vector<MeshReport> meshes;
   std::int64_t embedded_vertices = 0, embedding_outside = 0;
@@ -81,7 +83,10 @@ VoxelizeResult voxelize(const Spec& spec, const VoxelizeOptions& options = {});
 // Loads one mesh source (file or primitive) in metres, without cleaning.
 TriangleMesh load_mesh_source(const MeshSource& source);
 
-// The summary for people (several lines) and as one JSON document.
+// "1.50 GiB" or "12.3 MiB": how the summary and the memory error print a size in bytes.
+std::string format_bytes(double bytes);
+
+// The summary for people (several lines) and as one JSON document (summary_output.cpp).
 std::string summary_text(const Summary& s);
 std::string summary_json(const Summary& s);
 
