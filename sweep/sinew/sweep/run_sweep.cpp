@@ -92,6 +92,22 @@ Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& o
   ro.force = options.settings.force;
   std::string failure;
   try {
+    // An interrupted attempt of this very run (a SIGTERM, or mpirun ending the job when another
+    // rank died) goes on from its checkpoint; the runner checks the checkpoint's digest.
+    const auto checkpoint = dir / "checkpoint.h5";
+    const bool resume = summary_status(dir) == "interrupted" && fs::exists(checkpoint) &&
+                        read_or_empty(dir / "scene.yaml") == run.scene_text;
+    if (resume) {
+      ro.restart = checkpoint.string();
+      try {
+        simulator::run_scene(ro);
+        return collect_row(sweep, run, dir.string());
+      } catch (const ConfigError& e) {
+        if (e.file() != ro.restart) throw;
+        log::warn("{}: cannot resume ({}); running it again from the start", run.name, e.what());
+        ro.restart.clear();
+      }
+    }
     // What an earlier attempt left (frames, a checkpoint) would mix with this one's.
     fs::remove_all(dir);
     fs::create_directories(dir);

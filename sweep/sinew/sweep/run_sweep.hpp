@@ -5,8 +5,9 @@
 //
 // Resuming: a run whose folder holds its scene.yaml unchanged and a run_summary.json with a
 // terminal status (completed, unstable, failed) is finished and skipped; any other run (never
-// started, interrupted, cut off by a dead process, or whose values changed) is redone from the
-// start. A run that fails (instability, a setting its model rejects, any error) is recorded with
+// started, cut off by a dead process, or whose values changed) is redone from the start; an
+// interrupted run (SIGINT/SIGTERM, or mpirun ending the job when another rank died) goes on from
+// its checkpoint. A run that fails (instability, a setting its model rejects, any error) is recorded with
 // its message and the sweep goes on.
 //
 // Concurrency: `concurrent` runs at once in threads of this process, each with its own engine

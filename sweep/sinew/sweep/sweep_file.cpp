@@ -56,8 +56,12 @@ PlannedRun plan_run(const YamlNode& scene_doc, const std::string& scene_path,
   } catch (const ConfigError& e) {
     const RunValue* v = value_of_key(run.values, e.field());
     if (!v) throw;  // the base scene's own problem, named as it is
+    // The problem without its line in the generated scene: the sweep file's line is the one to see.
+    std::string problem = e.problem();
+    if (const auto at = problem.rfind(" (line "); at != std::string::npos && problem.back() == ')')
+      problem.erase(at);
     throw v->value.error(fmt::format("{}: the scene's {}: {}", run.describe(),
-                                     e.field().empty() ? "text" : e.field(), e.problem()));
+                                     e.field().empty() ? "text" : e.field(), problem));
   }
   if (!fs::exists(scene.model_path)) {
     const RunValue* v = value_of_key(run.values, "model");
