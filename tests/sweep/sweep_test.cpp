@@ -11,7 +11,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model_file.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
+#include "sinew/simulator/runner.hpp"
 #include "sinew/sweep/run_sweep.hpp"
 #include "sinew/sweep/sweep_file.hpp"
 
@@ -243,4 +243,28 @@ TEST_F(SweepTest, UnstableAndFailingRunsAreRecordedAndTheSweepGoesOn) {
   const auto csv = read(dir_ / "out" / "sweep_table.csv");
   EXPECT_NE(csv.find("run_0001,unstable,"), std::string::npos) << csv;
   EXPECT_NE(csv.find("run_0002,failed,"), std::string::npos) << csv;
+}
+
+TEST_F(SweepTest, AnInterruptedRunGoesOnFromItsCheckpointToTheSameFigures) {
+  const auto sw = parse(std::string(kHeader) +
+                        "grid:\n  damping: [400]\n"
+                        "figures:\n  - {name: base_fz, probe: base, value: fz}\n"
+                        "  - {name: top_uz_max, probe: top, value: uz, stat: max_abs}\n");
+  const auto clean = sweep::run_sweep(sw, options("clean"));
+  // The same run stopped half-way with a checkpoint, as SIGTERM (or mpirun ending the job) does.
+  const auto dir = dir_ / "out" / "run_0000";
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.yaml") << sw.runs[0].scene_text;
+  simulator::RunOptions ro;
+  ro.scene_path = (dir / "scene.yaml").string();
+  ro.output_dir = dir.string();
+  ro.device = "cpu";
+  ro.quiet = true;
+  ro.stop_at_step = 500;
+  ASSERT_EQ(simulator::run_scene(ro).summary.status, "interrupted");
+  const auto resumed = sweep::run_sweep(sw, options("out"));
+  EXPECT_EQ(resumed.ran, 1);
+  EXPECT_EQ(resumed.rows[0].status, "completed");
+  EXPECT_NE(read(dir / "run_summary.json").find("\"restart_step\": 500"), std::string::npos);
+  EXPECT_EQ(reproducible(resumed.rows[0]), reproducible(clean.rows[0]));
 }
