@@ -268,3 +268,22 @@ TEST_F(SweepTest, AnInterruptedRunGoesOnFromItsCheckpointToTheSameFigures) {
   EXPECT_NE(read(dir / "run_summary.json").find("\"restart_step\": 500"), std::string::npos);
   EXPECT_EQ(reproducible(resumed.rows[0]), reproducible(clean.rows[0]));
 }
+
+TEST_F(SweepTest, AnEmptyValueRemovesTheKeyAndTheBaseScenesOwnProblemsAreNamedAsItsOwn) {
+  const auto sw = parse(std::string(kHeader) +
+                        "list:\n  - {damping: ~, effects: [elasticity, hourglass, gravity]}\n");
+  ASSERT_EQ(sw.runs.size(), 1u);
+  EXPECT_EQ(sw.runs[0].scene_text.find("damping"), std::string::npos) << sw.runs[0].scene_text;
+  EXPECT_EQ(sw.runs[0].describe(),
+            "run 0 (damping = ~, effects = [elasticity, hourglass, gravity])");
+  // A value that breaks another key of the scene is blamed on the run.
+  const auto m = error_of(std::string(kHeader) + "list:\n  - {effects: [elasticity, gravity]}\n");
+  EXPECT_NE(m.find("sweep.yaml: list[0].effects: run 0 (effects = [elasticity, gravity]): the "
+                   "scene's damping: 'damping' is given but 'damping' is not in effects"),
+            std::string::npos)
+      << m;
+  // A broken base scene is named as itself, before any run is planned.
+  write("cube.yaml", std::string(kScene) + "dampin: 3\n");
+  const auto b = error_of(std::string(kHeader) + "grid: {damping: [1]}\n");
+  EXPECT_NE(b.find("cube.yaml: dampin: unknown key 'dampin'"), std::string::npos) << b;
+}

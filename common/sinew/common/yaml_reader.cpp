@@ -269,7 +269,9 @@ std::string YamlNode::replaced(const std::vector<YamlReplacement>& replacements)
         throw r.value.error(fmt::format("the document has no map at '{}' (for key '{}')",
                                         walked.substr(0, walked.size() - s.key.size()), s.key));
       }
-      if (last) {
+      if (last && r.value.state_->node.IsNull()) {
+        at.remove(s.key);  // an empty value removes the key: the reader's default applies
+      } else if (last) {
         at[s.key] = YAML::Clone(r.value.state_->node);
       } else {
         const YAML::Node& cat = at;

@@ -90,7 +90,8 @@ class YamlNode {
   // way must exist and every list index must be in range; the last key of a map may be new (the
   // reader of the result checks it is allowed). A path that does not lead into the document
   // throws the ConfigError of the replacing node (its file and key): "no key 'x' at 'a.x' in the
-  // document", "index 4 out of range at 'probes[4]' (3 items)", "malformed key path".
+  // document", "index 4 out of range at 'probes[4]' (3 items)", "malformed key path". An empty
+  // value (`~`) for a map key removes the key, so the reader's default applies.
   std::string replaced(const std::vector<YamlReplacement>& replacements) const;
 
   // The value of a name table (names.hpp) whose name the text is, else

@@ -19,9 +19,9 @@ constexpr int kFormatVersion = 1;
 // The values of one run before the scene is made: (path, value) in the order of the columns.
 using Values = std::vector<RunValue>;
 
+// An empty value (~) removes the key from the run's scene: its default applies.
 RunValue run_value(const std::string& path, const YamlNode& value) {
-  if (!value.defined()) throw value.error("empty value (give the value to use)");
-  return {path, value, value.emit()};
+  return {path, value, value.defined() ? value.emit() : "~"};
 }
 
 // Which parameter an error of a run's scene is about: the varied path that is the scene key or
@@ -54,8 +54,11 @@ PlannedRun plan_run(const YamlNode& scene_doc, const std::string& scene_path,
   try {
     scene = simulator::parse_scene_text(text, scene_path, directory);
   } catch (const ConfigError& e) {
+    // The base scene reads on its own (checked first), so the run's values are the cause: the
+    // one at the key, else the run's first.
     const RunValue* v = value_of_key(run.values, e.field());
-    if (!v) throw;  // the base scene's own problem, named as it is
+    if (!v && run.values.empty()) throw;
+    if (!v) v = &run.values.front();
     // The problem without its line in the generated scene: the sweep file's line is the one to see.
     std::string problem = e.problem();
     if (const auto at = problem.rfind(" (line "); at != std::string::npos && problem.back() == ')')
@@ -212,9 +215,12 @@ Sweep parse_sweep_text(const std::string& text, const std::string& file,
     if (r.has("force")) sweep.settings.force = r.child("force").boolean();
   }
 
-  // Plan every run: substitute, parse as a scene, check the model exists.
-  const YamlNode scene_doc =
-      parse_yaml(read_text_file(sweep.scene_path, "base scene"), sweep.scene_path);
+  // Plan every run: substitute, parse as a scene, check the model exists. The base scene first,
+  // so that its own problems are named as its own.
+  const auto scene_text = read_text_file(sweep.scene_path, "base scene");
+  simulator::parse_scene_text(scene_text, sweep.scene_path,
+                              fs::path(sweep.scene_path).parent_path().string());
+  const YamlNode scene_doc = parse_yaml(scene_text, sweep.scene_path);
   const int width =
       std::max<int>(4, int(std::to_string(std::max<std::int64_t>(count - 1, 0)).size()));
   std::vector<std::size_t> at(grid.size(), 0);
