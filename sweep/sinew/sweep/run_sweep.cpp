@@ -164,15 +164,12 @@ void check_thread_safe_hdf5(int concurrent) {
   }
 }
 
-SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options) {
-  const int concurrent = std::max(1, options.settings.concurrent);
-  check_thread_safe_hdf5(concurrent);
+std::vector<std::size_t> start_sweep(const Sweep& sweep, const SweepOptions& options,
+                                     SweepReport& report) {
   std::error_code ec;
   fs::create_directories(options.output_dir, ec);
   if (ec)
     throw IoError(options.output_dir, "", "cannot create the results folder: " + ec.message());
-
-  SweepReport report;
   std::vector<std::size_t> pending;
   for (std::size_t i = 0; i < sweep.runs.size(); ++i) {
     const auto& run = sweep.runs[i];
@@ -185,6 +182,14 @@ SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options) {
     }
   }
   write_table(sweep, report.rows, options.output_dir);
+  return pending;
+}
+
+SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options) {
+  const int concurrent = std::max(1, options.settings.concurrent);
+  check_thread_safe_hdf5(concurrent);
+  SweepReport report;
+  const auto pending = start_sweep(sweep, options, report);
 
   SweepProgress progress(std::int64_t(pending.size()), report.skipped, options.quiet);
   std::mutex mutex;  // rows, progress, table

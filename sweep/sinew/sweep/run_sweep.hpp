@@ -64,6 +64,12 @@ struct SweepReport {
   bool interrupted = false;  // SIGINT/SIGTERM stopped it; a rerun goes on
 };
 
+// The start of a sweep (here or on MPI rank 0): creates the results folder, fills report.rows with
+// the finished runs' rows (counted as skipped) and pending rows for the others, writes the table,
+// and returns the indices of the runs to run.
+std::vector<std::size_t> start_sweep(const Sweep& sweep, const SweepOptions& options,
+                                     SweepReport& report);
+
 // Runs the sweep in this process: `concurrent` runs at once. Writes the table as runs finish
 // (at most every few seconds) and at the end.
 SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options);

@@ -36,18 +36,7 @@ void nap() {
 
 SweepReport manage(const Sweep& sweep, const SweepOptions& options, int workers) {
   SweepReport report;
-  std::vector<std::size_t> pending;
-  for (std::size_t i = 0; i < sweep.runs.size(); ++i) {
-    const auto& run = sweep.runs[i];
-    if (run_is_finished(options, run)) {
-      report.rows.push_back(collect_row(sweep, run, run_directory(options, run)));
-      ++report.skipped;
-    } else {
-      report.rows.push_back(collect_row(sweep, run, ""));
-      pending.push_back(i);
-    }
-  }
-  write_table(sweep, report.rows, options.output_dir);
+  const auto pending = start_sweep(sweep, options, report);
   SweepProgress progress(std::int64_t(pending.size()), report.skipped, options.quiet);
   std::size_t next = 0;
   int done = 0;
@@ -185,13 +174,6 @@ SweepReport run_sweep_mpi(const Sweep& sweep, SweepOptions options, const MpiSes
   if (session.size() < 2)
     throw ConfigError("", "mpirun -n", "an MPI sweep needs at least 2 ranks (rank 0 hands out)");
   check_thread_safe_hdf5(options.settings.concurrent);
-  if (session.rank() == 0) {
-    std::error_code ec;
-    std::filesystem::create_directories(options.output_dir, ec);
-    if (ec)
-      throw IoError(options.output_dir, "", "cannot create the results folder: " + ec.message());
-  }
-  MPI_Barrier(MPI_COMM_WORLD);
   if (session.rank() == 0) return manage(sweep, options, session.size() - 1);
   options.ranks_on_machine = local_size();
   if (const int gpus = simulator::cuda_device_count(); gpus > 0 && options.settings.device != "cpu")
