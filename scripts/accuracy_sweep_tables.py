@@ -46,9 +46,19 @@ def fig(run, name):
     return math.nan if v is None else v
 
 
+def steps(run):
+    return int(fig(run, "steps_done")) if math.isfinite(fig(run, "steps_done")) else "–"
+
+
+def run_seconds(runs):
+    return sum(fig(r, "wall_time_s") for r in runs if math.isfinite(fig(r, "wall_time_s")))
+
+
 def model_name(run):
     return os.path.basename(str(run["values"].get("model", ""))).removesuffix(".h5")
 
+
+SWEEPS = ["convergence", "nu_sweep", "forehead_resolution", "knobs"]
 
 SKIN = ["brow_left_uy", "brow_left_uz", "brow_centre_uz", "brow_right_uz", "mid_left_uy",
         "mid_left_uz", "middle_uz", "upper_left_uz"]
@@ -75,7 +85,7 @@ def convergence_tables(runs):
         for r in rs:
             n = model_name(r).split("_n")[1].split("_")[0]
             tip = -fig(r, "tip_uz")
-            body.append([n, r["figures"]["steps_done"], g(fig(r, "wall_time_s")), g(tip * 1e3, 5),
+            body.append([n, steps(r), g(fig(r, "wall_time_s")), g(tip * 1e3, 5),
                          pct(abs(tip - ref) / ref) if r is not finest else "reference",
                          pct(tip / beam - 1), r["status"]])
         out.append(f"Cantilever, ν = {nu} (tip = −u_z of the end face's centre node at 0.05 s):\n\n" +
@@ -89,7 +99,7 @@ def nu_table(runs):
     for r in runs:
         nu = float(model_name(r).split("_nu")[1])
         tip = -fig(r, "tip_uz")
-        body.append([g(nu, 5), r["values"].get("hourglass.modulus"), r["figures"]["steps_done"],
+        body.append([g(nu, 5), r["values"].get("hourglass.modulus"), steps(r),
                      g(fig(r, "wall_time_s")), g(tip * 1e3, 5), pct(tip / beam_theory_tip(nu) - 1),
                      r["status"]])
     return ("Near-incompressible bending, n = 2, κ = 0.075 (negative: stiffer than beam theory, "
@@ -99,7 +109,7 @@ def nu_table(runs):
 
 def forehead_table(runs):
     ref = runs[-1]
-    body = [[model_name(r).removeprefix("forehead_patch_"), r["figures"]["steps_done"],
+    body = [[g(int(model_name(r).split("_")[-1].removesuffix("um")) / 1000) + " mm", steps(r),
              g(fig(r, "wall_time_s")), g(fig(r, "brow_centre_uz") * 1e3, 4),
              g(fig(r, "mid_left_uy") * 1e3, 4),
              pct(skin_change(r, ref)) if r is not ref else "reference", r["status"]]
@@ -117,7 +127,7 @@ def knobs_table(runs, reference):
         name = r["values"].get("title") or values
         if r["values"].get("title") and values:
             name += f" ({values})"
-        body.append([name.replace("[", "\\[").replace("]", "\\]"), r["figures"]["steps_done"],
+        body.append([name.replace("[", "\\[").replace("]", "\\]"), steps(r),
                      g(fig(r, "wall_time_s")),
                      pct(skin_change(r, base)) if r is not base else "–",
                      pct(skin_change(r, reference)), r["status"]])
@@ -134,6 +144,9 @@ def main():
     ap.add_argument("--note", default="")
     a = ap.parse_args()
     parts = [a.note] if a.note else []
+    seconds = {n: run_seconds(r) for n in SWEEPS if (r := load(a.results, n))}
+    parts.append("Wall time of the runs (their `wall_time_s`, summed): " +
+                 ", ".join(f"{n} {s:.0f} s" for n, s in seconds.items()) + ".")
     if runs := load(a.results, "convergence"):
         parts += convergence_tables(runs)
     if runs := load(a.results, "nu_sweep"):
