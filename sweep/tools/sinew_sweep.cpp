@@ -108,7 +108,7 @@ int main(int argc, char** argv) {
       std::string text = fmt::format("{}: {} runs of {}{}\n", sweep_path, sw.runs.size(),
                                      sw.scene_path, sw.title.empty() ? "" : " (" + sw.title + ")");
       for (const auto& r : sw.runs)
-        text += fmt::format("  {} {}{}\n", r.name, r.describe(),
+        text += fmt::format("  {}  {}{}\n", r.name, r.values_text(),
                             sweep::run_is_finished(so, r) ? " [finished]" : "");
       std::fputs(text.c_str(), stdout);
       return tool::kExitOk;

@@ -3,6 +3,7 @@
 // bit for bit with runs at once, resuming, and failed runs recorded without stopping the sweep.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -11,6 +12,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model_file.hpp"
+#include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/runner.hpp"
 #include "sinew/sweep/run_sweep.hpp"
 #include "sinew/sweep/sweep_file.hpp"
@@ -42,9 +44,10 @@ probes:
 class SweepTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("sinew_sweep_test_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    // One folder per test (parametrised names hold a '/').
+    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    dir_ = fs::temp_directory_path() / ("sinew_sweep_test_" + name);
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     formats::BoxSpec spec;
@@ -167,7 +170,20 @@ TEST_F(SweepTest, PlansTheProductOfListAndGridWithTheValuesInEachScene) {
       << text;
 }
 
-TEST_F(SweepTest, GravityGridGivesTheWeightOnTheBaseAndTheSameTableWithRunsAtOnce) {
+// The physics of a sweep on every backend: CPU always, CUDA when built with it (skipped without a
+// device).
+class SweepBackendTest : public SweepTest, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(SweepBackendTest, GravityGridGivesTheWeightOnTheBaseAndTheSameTableWithRunsAtOnce) {
+  const std::string device = GetParam();
+  if (device == "cuda" && !simulator::cuda_device_available()) GTEST_SKIP() << "no CUDA device";
+  // Several runs at once: on the GPU each engine on its own streams.
+  const int at_once = device == "cuda" ? 3 : 2;
+  const auto options = [&](const std::string& out, int concurrent) {
+    auto o = SweepTest::options(out, concurrent);
+    o.settings.device = device;
+    return o;
+  };
   const auto sw = parse(std::string(kHeader) +
                         "grid:\n  gravity: [[0, 0, -9.81], [0, 0, -3.7], [0, 0, -1.62]]\n"
                         "figures:\n  - {name: base_fz, probe: base, value: fz}\n"
@@ -185,8 +201,8 @@ TEST_F(SweepTest, GravityGridGivesTheWeightOnTheBaseAndTheSameTableWithRunsAtOnc
     EXPECT_NEAR(*one.rows[i].figures[0], kMass * g[i], 1e-6 * kMass * g[i]) << i;
     EXPECT_GT(*one.rows[i].figures[1], 0.0);
   }
-  // Two runs at once in threads: the same figures, bit for bit (wall time aside).
-  const auto two = sweep::run_sweep(sw, options("two", 2));
+  // Runs at once in threads: the same figures, bit for bit (wall time aside).
+  const auto two = sweep::run_sweep(sw, options("two", at_once));
   for (std::size_t i = 0; i < 3; ++i) {
     EXPECT_EQ(two.rows[i].status, "completed");
     for (std::size_t f = 0; f + 1 < one.rows[i].figures.size(); ++f)
@@ -198,6 +214,9 @@ TEST_F(SweepTest, GravityGridGivesTheWeightOnTheBaseAndTheSameTableWithRunsAtOnc
   EXPECT_TRUE(fs::exists(dir_ / "one" / "sweep_table.json"));
   EXPECT_TRUE(fs::exists(dir_ / "one" / "run_0002" / "results.h5"));
 }
+
+INSTANTIATE_TEST_SUITE_P(Backends, SweepBackendTest, ::testing::Values("cpu", "cuda"),
+                         [](const auto& info) { return info.param; });
 
 TEST_F(SweepTest, RerunSkipsFinishedRunsAndRedoesTheOthers) {
   const auto text = std::string(kHeader) + "grid:\n  damping: [300, 400, 500]\n";

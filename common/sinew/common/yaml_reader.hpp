@@ -84,8 +84,8 @@ class YamlNode {
   std::string emit() const;
 
   // Editing, for documents made from other documents (sinew-sweep writes one scene per run from
-  // a base scene): this node's whole document, copied, with the value at each key path replaced by
-  // a copy of the given node, as YAML text (block style; comments are not kept). A key path is
+  // a base scene): this document (the node must be parse_yaml's root), copied, with the value at
+  // each key path replaced by a copy of the given node, as YAML text (comments are not kept). A key path is
   // what path() gives: "damping", "muscles.frontalis_l.peak", "probes[2].point". Every map on the
   // way must exist and every list index must be in range; the last key of a map may be new (the
   // reader of the result checks it is allowed). A path that does not lead into the document

@@ -97,22 +97,25 @@ Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& o
     const auto checkpoint = dir / "checkpoint.h5";
     const bool resume = summary_status(dir) == "interrupted" && fs::exists(checkpoint) &&
                         read_or_empty(dir / "scene.yaml") == run.scene_text;
+    bool done = false;
     if (resume) {
       ro.restart = checkpoint.string();
       try {
         simulator::run_scene(ro);
-        return collect_row(sweep, run, dir.string());
+        done = true;
       } catch (const ConfigError& e) {
         if (e.file() != ro.restart) throw;
         log::warn("{}: cannot resume ({}); running it again from the start", run.name, e.what());
         ro.restart.clear();
       }
     }
-    // What an earlier attempt left (frames, a checkpoint) would mix with this one's.
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    write_text_atomically(scene_path, run.scene_text);
-    simulator::run_scene(ro);
+    if (!done) {
+      // What an earlier attempt left (frames, a checkpoint) would mix with this one's.
+      fs::remove_all(dir);
+      fs::create_directories(dir);
+      write_text_atomically(scene_path, run.scene_text);
+      simulator::run_scene(ro);
+    }
   } catch (const InstabilityError&) {
     // The runner wrote the summary: status unstable, its message, every frame so far.
   } catch (const std::exception& e) {
@@ -132,7 +135,15 @@ Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& o
       log::error("{}: cannot record the failure ({}): {}", run.name, e.what(), failure);
     }
   }
-  return collect_row(sweep, run, dir.string());
+  try {
+    return collect_row(sweep, run, dir.string());
+  } catch (const std::exception& e) {
+    // A probe file or summary that does not read back: the run's row says so, the sweep goes on.
+    Row row = collect_row(sweep, run, "");
+    row.status = "failed";
+    row.message = std::string("its results do not read back: ") + e.what();
+    return row;
+  }
 }
 
 SweepProgress::SweepProgress(std::int64_t to_run, std::int64_t skipped, bool quiet)

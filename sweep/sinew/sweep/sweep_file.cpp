@@ -82,9 +82,14 @@ PlannedRun plan_run(const YamlNode& scene_doc, const std::string& scene_path,
 
 }  // namespace
 
-std::string PlannedRun::describe() const {
+std::string PlannedRun::values_text() const {
   std::string v;
   for (const auto& x : values) v += (v.empty() ? "" : ", ") + x.path + " = " + x.text;
+  return v;
+}
+
+std::string PlannedRun::describe() const {
+  const auto v = values_text();
   return v.empty() ? fmt::format("run {}", index) : fmt::format("run {} ({})", index, v);
 }
 

@@ -33,6 +33,7 @@ struct PlannedRun {
   std::vector<RunValue> values;
   std::string scene_text;        // the run's scene (model path absolute)
   std::string model_path;        // resolved
+  std::string values_text() const;  // "damping = 50, mass_scaling = 4"
   std::string describe() const;  // "run 7 (damping = 50, mass_scaling = 4)"
 };
 
