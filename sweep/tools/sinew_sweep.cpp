@@ -93,7 +93,15 @@ int main(int argc, char** argv) {
   return tool::run("sinew-sweep", [&] {
     sweep::ParseOptions po;
     po.yes = yes;
+#if defined(SINEW_WITH_MPI)
+    // Every rank reads the sweep file; a bad one is reported once, by rank 0.
+    const auto level = log::level();
+    if (mpi && mpi->rank() != 0) log::set_level(log::Level::off);
+#endif
     const auto sw = sweep::parse_sweep(sweep_path, po);
+#if defined(SINEW_WITH_MPI)
+    log::set_level(level);
+#endif
     sweep::SweepOptions so;
     so.settings = sw.settings;
     if (!device.empty()) so.settings.device = device;
