@@ -31,10 +31,10 @@ struct PlannedRun {
   std::int64_t index = 0;
   std::string name;  // "run_0007": its folder under the results folder
   std::vector<RunValue> values;
-  std::string scene_text;        // the run's scene (model path absolute)
-  std::string model_path;        // resolved
+  std::string scene_text;           // the run's scene (model path absolute)
+  std::string model_path;           // resolved
   std::string values_text() const;  // "damping = 50, mass_scaling = 4"
-  std::string describe() const;  // "run 7 (damping = 50, mass_scaling = 4)"
+  std::string describe() const;     // "run 7 (damping = 50, mass_scaling = 4)"
 };
 
 // How to run: the sweep file's `run:` section, overridden by the command line.
