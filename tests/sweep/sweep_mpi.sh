@@ -15,6 +15,7 @@ if [[ -z "$mpirun" ]]; then
   exit 77
 fi
 fail() { echo "FAILED: $*" >&2; exit 1; }
+trap 'echo "FAILED: line $LINENO: $BASH_COMMAND exited $?" >&2' ERR
 mpi=("$mpirun" --oversubscribe -n 3)
 [[ $(id -u) -eq 0 ]] && mpi=("$mpirun" --oversubscribe --allow-run-as-root -n 3)
 export OMP_WAIT_POLICY=PASSIVE
@@ -94,7 +95,7 @@ set +e
 wait "$launcher"; rc=$?
 set -e
 [[ $rc -ne 0 ]] || fail "mpirun exited 0 although rank 2 was killed"
-finished=$(grep -ls -e '"status": "completed"' -e '"status": "unstable"' killed/run_*/run_summary.json | wc -l)
+finished=$(cat killed/run_*/run_summary.json 2>/dev/null | grep -c -e '"status": "completed"' -e '"status": "unstable"' || true)
 echo "killed rank 2: mpirun exit $rc, $finished of 6 runs finished"
 [[ $finished -ge 1 && $finished -lt 6 ]] || fail "expected some but not all runs finished, got $finished"
 mpirun_matches_one_process "the rerun after the killed rank" killed
