@@ -73,6 +73,7 @@ bool run_is_finished(const SweepOptions& options, const PlannedRun& run) {
 }
 
 Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options) {
+  const log::ScopedContext context(run.name);  // the runner's messages name the run
   const fs::path dir = run_directory(options, run);
   const auto scene_path = (dir / "scene.yaml").string();
   simulator::RunOptions ro;
@@ -105,7 +106,7 @@ Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& o
         done = true;
       } catch (const ConfigError& e) {
         if (e.file() != ro.restart) throw;
-        log::warn("{}: cannot resume ({}); running it again from the start", run.name, e.what());
+        log::warn("cannot resume ({}); running it again from the start", e.what());
         ro.restart.clear();
       }
     }
@@ -132,7 +133,7 @@ Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& o
       fs::create_directories(dir);
       simulator::write_run_summary((dir / "run_summary.json").string(), s);
     } catch (const std::exception& e) {
-      log::error("{}: cannot record the failure ({}): {}", run.name, e.what(), failure);
+      log::error("cannot record the failure ({}): {}", e.what(), failure);
     }
   }
   try {
