@@ -50,38 +50,23 @@ spdlog::logger& logger() {
 
 void set_level(Level level) {
   switch (level) {
-    case Level::debug:
-      logger().set_level(spdlog::level::debug);
-      break;
-    case Level::info:
-      logger().set_level(spdlog::level::info);
-      break;
-    case Level::warn:
-      logger().set_level(spdlog::level::warn);
-      break;
-    case Level::error:
-      logger().set_level(spdlog::level::err);
-      break;
-    case Level::off:
-      logger().set_level(spdlog::level::off);
-      break;
+    case Level::debug: logger().set_level(spdlog::level::debug); break;
+    case Level::info: logger().set_level(spdlog::level::info); break;
+    case Level::warn: logger().set_level(spdlog::level::warn); break;
+    case Level::error: logger().set_level(spdlog::level::err); break;
+    case Level::off: logger().set_level(spdlog::level::off); break;
   }
 }
 
 Level level() {
   switch (logger().level()) {
     case spdlog::level::trace:
-    case spdlog::level::debug:
-      return Level::debug;
-    case spdlog::level::info:
-      return Level::info;
-    case spdlog::level::warn:
-      return Level::warn;
+    case spdlog::level::debug: return Level::debug;
+    case spdlog::level::info: return Level::info;
+    case spdlog::level::warn: return Level::warn;
     case spdlog::level::err:
-    case spdlog::level::critical:
-      return Level::error;
-    default:
-      return Level::off;
+    case spdlog::level::critical: return Level::error;
+    default: return Level::off;
   }
 }
 
@@ -91,8 +76,7 @@ Level parse_level(const std::string& name) {
   if (name == "warn") return Level::warn;
   if (name == "error") return Level::error;
   if (name == "off") return Level::off;
-  throw ConfigError("", "log level",
-                    "unknown level '" + name + "' (debug, info, warn, error, off)");
+  throw ConfigError("", "log level", "unknown level '" + name + "' (debug, info, warn, error, off)");
 }
 
 }  // namespace sinew::log
