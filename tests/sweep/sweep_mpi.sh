@@ -57,9 +57,8 @@ YAML
 # Every column but the last (wall_time_s).
 table() { cut -d, -f1-$(($(head -1 "$1" | tr ',' '\n' | wc -l) - 1)) "$1"; }
 
-set +e
-"$sweep" sweep.yaml -o one -q; rc=$?
-set -e
+rc=0
+"$sweep" sweep.yaml -o one -q || rc=$?
 [[ $rc -eq 3 ]] || fail "one process: exit status $rc, expected 3 (one unstable run)"
 [[ $(grep -c ',completed,' one/sweep_table.csv) -eq 4 ]] || fail "one process: 4 completed runs expected: $(cat one/sweep_table.csv)"
 [[ $(grep -c ',unstable,' one/sweep_table.csv) -eq 2 ]] || fail "one process: 2 unstable runs expected: $(cat one/sweep_table.csv)"
@@ -76,24 +75,36 @@ mpirun_matches_one_process() {
 mpirun_matches_one_process "mpirun -n 3" three
 echo "1 and 3 ranks: the same table ($(($(wc -l < one/sweep_table.csv) - 1)) runs)"
 
-# 2. Kill rank 2 once a run has finished.
+# in_flight: true when a run folder has no finished summary yet (a run is going on).
+in_flight() {
+  local d
+  for d in killed/run_*/; do
+    [[ -f "$d/scene.yaml" ]] || continue
+    grep -qs -e '"status": "completed"' -e '"status": "unstable"' "$d/run_summary.json" || return 0
+  done
+  return 1
+}
+
+# 2. Kill rank 2 once a run has finished while another is going on.
 "${mpi[@]}" "$sweep" sweep.yaml -o killed -q > killed_first.log 2>&1 &
 launcher=$!
 victim=""
-for _ in $(seq 1 600); do
-  if grep -qs '"status": "completed"' killed/run_*/run_summary.json; then
-    for p in $(pgrep -P "$launcher"); do
-      if tr '\0' '\n' < "/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=2'; then victim=$p; fi
-    done
-    [[ -n "$victim" ]] && break
-  fi
-  sleep 0.05
+for _ in $(seq 1 3000); do
+  for p in $(pgrep -P "$launcher"); do
+    if tr '\0' '\n' < "/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=2'; then victim=$p; fi
+  done
+  [[ -n "$victim" ]] && break
+  sleep 0.01
 done
-[[ -n "$victim" ]] || fail "no run finished, or rank 2 was not found: $(cat killed_first.log)"
+[[ -n "$victim" ]] || fail "rank 2 was not found: $(cat killed_first.log)"
+# The victim is known beforehand, so the kill follows the check at once.
+for _ in $(seq 1 3000); do
+  grep -qs '"status": "completed"' killed/run_*/run_summary.json && in_flight && break
+  sleep 0.01
+done
 kill -9 "$victim"
-set +e
-wait "$launcher"; rc=$?
-set -e
+rc=0
+wait "$launcher" || rc=$?
 [[ $rc -ne 0 ]] || fail "mpirun exited 0 although rank 2 was killed"
 finished=$(cat killed/run_*/run_summary.json 2>/dev/null | grep -c -e '"status": "completed"' -e '"status": "unstable"' || true)
 echo "killed rank 2: mpirun exit $rc, $finished of 6 runs finished"
