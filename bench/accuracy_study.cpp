@@ -14,6 +14,8 @@
 //
 // Usage: accuracy_study [--quick | --full] [--device cpu|cuda] [--threads N] [--csv FILE]
 //                       [--problems convergence,nu_sweep,forehead,knobs] [--provenance TEXT]
+//        accuracy_study --write-models DIR [--full]   (the models of the sweep files in
+//                       bench/accuracy/, as model files; nothing is run)
 #include <unistd.h>
 
 #include <algorithm>
@@ -26,6 +28,7 @@
 #include <cstring>
 #include <ctime>
 #include <exception>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -40,6 +43,7 @@
 #include "sinew/common/math.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/formats/box_model.hpp"
+#include "sinew/formats/model_file.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/engine.hpp"
 #include "sliding_height_field.hpp"
@@ -65,6 +69,7 @@ struct Options {
   std::set<std::string> problems{"convergence", "nu_sweep", "forehead", "knobs"};
   std::string provenance;
   std::string command;
+  std::string write_models;  // --write-models DIR: write the models and stop
 };
 
 struct Row {
@@ -212,16 +217,24 @@ double beam_theory_tip(double nu) {
   return q * std::pow(kBeamL, 4) / (8 * e * i) + q * kBeamL * kBeamL / (2 * ks * kBeamMu * a);
 }
 
+// The beam's model: n elements through the thickness, 5n along. `clamped_face`: the clamp as the
+// model's rigid nodes (the x_min face), for the model files of --write-models; the runs here set
+// it in their Setup.
+formats::Model beam_model(int n, double nu, bool clamped_face = false) {
+  formats::BoxSpec spec;
+  spec.dims = {5 * n, n, n};
+  spec.voxel_size = kBeamT / n;
+  spec.materials = {
+      formats::make_neo_hookean_material("beam", 2 * kBeamMu * (1 + nu), nu, kBeamRho)};
+  if (clamped_face) spec.rigid_faces = {"x_min"};
+  spec.created = "2026-01-01T00:00:00Z";
+  return formats::make_box_model(spec);
+}
+
 BeamResult run_beam(const Options& o, const BeamSpec& c) {
   const int n = c.n, nx = 5 * n;
   const double h = kBeamT / n;
-  formats::BoxSpec spec;
-  spec.dims = {nx, n, n};
-  spec.voxel_size = h;
-  spec.materials = {
-      formats::make_neo_hookean_material("beam", 2 * kBeamMu * (1 + c.nu), c.nu, kBeamRho)};
-  spec.created = "2026-01-01T00:00:00Z";
-  const formats::Model model = formats::make_box_model(spec);
+  const formats::Model model = beam_model(n, c.nu);
   Setup s;
   s.precision = c.precision;
   s.effects.gravity = true;
@@ -304,7 +317,9 @@ bench::HeightField skull_surface() {
   });
 }
 
-formats::Model forehead_patch(double h) {
+// `rigid_scalp`: the edge y = 8 mm as the model's rigid nodes (the y_max face), for the model files
+// of --write-models; the runs here set it in their Setup.
+formats::Model forehead_patch(double h, bool rigid_scalp = false) {
   const int nx = int(std::lround(kPatchX / h)), ny = int(std::lround(kPatchY / h)),
             nz = int(std::lround(kPatchZ / h));
   auto tissue = [](const char* name, double e) {
@@ -316,6 +331,7 @@ formats::Model forehead_patch(double h) {
   spec.materials = {tissue("muscle", 0.5e6), tissue("hypodermis", 34e3), tissue("dermis", 81.4e3),
                     tissue("stratum_corneum", 48e6)};
   spec.layer_boundaries = {0.5e-3, 1.0e-3, 1.98e-3};
+  if (rigid_scalp) spec.rigid_faces = {"y_max"};
   const int layers = int(std::ceil(0.5e-3 / h - 1e-9));
   for (int m = 0; m < 2; ++m) {
     formats::BoxMuscleSpec ms;
@@ -331,6 +347,13 @@ formats::Model forehead_patch(double h) {
   spec.created = "2026-01-01T00:00:00Z";
   formats::Model model = formats::make_box_model(spec);
   bench::bind_bottom_to_height_field(model, skull_surface(), 8);
+  // A node both rigid and sliding (the scalp edge's bottom row) is rigid: the model format allows
+  // one role per node.
+  if (rigid_scalp) {
+    std::erase_if(model.sliding, [&](const formats::SlidingBinding& b) {
+      return std::binary_search(model.rigid_nodes.begin(), model.rigid_nodes.end(), b.node);
+    });
+  }
   return model;
 }
 
@@ -741,6 +764,40 @@ void knobs(Context& ctx, const PatchReference& ref) {
     }
 }
 
+// --write-models DIR: the study's models as model files for the sweep files of bench/accuracy/
+// (README there): the cantilevers cantilever_n<n>_nu<nu>.h5 (clamped face as rigid nodes) and the
+// forehead patches forehead_patch_<h in um>um.h5 (scalp edge as rigid nodes, sliding skull).
+// --full adds the full study's finer patches (0.25 and 0.125 mm: 131,072 elements).
+void write_models(const Options& o, const std::string& dir) {
+  std::filesystem::create_directories(dir);
+  const auto write = [&](const formats::Model& m, const std::string& name) {
+    const auto path = (std::filesystem::path(dir) / name).string();
+    formats::write_model(m, path);
+    std::printf("wrote %s: %zu elements\n", path.c_str(), m.element_count());
+  };
+  char name[96];
+  std::set<std::pair<int, double>> beams;
+  for (double nu : {0.3, 0.49})
+    for (int n : {1, 2, 3, 4, 6, 8}) beams.insert({n, nu});
+  if (o.full)
+    for (double nu : {0.3, 0.49})
+      for (int n : {12, 16}) beams.insert({n, nu});
+  for (double nu : {0.3, 0.4, 0.45, 0.49, 0.495, 0.499, 0.4999}) {
+    beams.insert({2, nu});
+    if (o.full) beams.insert({4, nu});
+  }
+  for (const auto& [n, nu] : beams) {
+    std::snprintf(name, sizeof name, "cantilever_n%d_nu%g.h5", n, nu);
+    write(beam_model(n, nu, true), name);
+  }
+  std::vector<double> hs = {1e-3, 2e-3 / 3, 0.5e-3, 0.4e-3, 1e-3 / 3};
+  if (o.full) hs.insert(hs.end(), {0.25e-3, 0.125e-3});
+  for (double h : hs) {
+    std::snprintf(name, sizeof name, "forehead_patch_%dum.h5", int(std::lround(h * 1e6)));
+    write(forehead_patch(h, true), name);
+  }
+}
+
 int run(int argc, char** argv) {
   Options o;
   for (int i = 0; i < argc; ++i) o.command += (i ? " " : "") + std::string(argv[i]);
@@ -762,6 +819,8 @@ int run(int argc, char** argv) {
       o.csv = value();
     else if (a == "--provenance")
       o.provenance = value();
+    else if (a == "--write-models")
+      o.write_models = value();
     else if (a == "--problems") {
       o.problems.clear();
       std::stringstream ss(value());
@@ -772,9 +831,13 @@ int run(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: accuracy_study [--quick|--full] [--device cpu|cuda] [--threads N] "
                    "[--csv FILE] [--problems convergence,nu_sweep,forehead,knobs] "
-                   "[--provenance TEXT]\n");
+                   "[--provenance TEXT] [--write-models DIR]\n");
       return 2;
     }
+  }
+  if (!o.write_models.empty()) {
+    write_models(o, o.write_models);
+    return 0;
   }
   if (o.device != "cpu" && o.device != "cuda") throw ConfigError("", "--device", "cpu or cuda");
   std::string machine;

@@ -17,10 +17,19 @@ import os
 import re
 import sys
 
-import matplotlib
+# matplotlib is imported by main() only, so that scripts/accuracy_sweep_tables.py can use the
+# table helpers here without it.
+plt = None
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+
+def import_pyplot():
+    global plt
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot
+
+    plt = matplotlib.pyplot
 
 
 def num(v):
@@ -458,6 +467,7 @@ def main():
     ap.add_argument("--doc", default="docs/accuracy-vs-time.md")
     ap.add_argument("--images", default="docs/images/accuracy")
     a = ap.parse_args()
+    import_pyplot()
     header, rows = read(a.csv)
     os.makedirs(a.images, exist_ok=True)
     if sel(rows, "convergence", "per_edge"):

@@ -196,5 +196,41 @@ TEST(YamlReader, ReadsTextFiles) {
   }
 }
 
+TEST(YamlReader, ReplacesValuesAtKeyPathsInACopyOfTheDocument) {
+  const auto doc = parse_yaml(
+      "a: 1\nb: {c: 2, d: [1, 2, 3]}\nlist:\n  - {x: 1}\n  - {x: 2}\nkeep: text\n", "doc.yaml");
+  const auto values = parse_yaml("v1: 5\nv2: [7, 8]\nv3: {y: 3}\nv4: ~\nv5: 9\n", "sweep.yaml");
+  const auto out = doc.replaced({{"a", values.child("v1")},
+                                 {"b.d", values.child("v2")},
+                                 {"list[1]", values.child("v3")},
+                                 {"keep", values.child("v4")},
+                                 {"b.new", values.child("v5")}});
+  const auto r = parse_yaml(out, "out.yaml");
+  EXPECT_EQ(r.child("a").integer(), 5);
+  EXPECT_EQ(r.child("b").child("c").integer(), 2);
+  EXPECT_EQ(r.child("b").child("d").emit(), "[7, 8]");
+  EXPECT_EQ(r.child("b").child("new").integer(), 9);
+  EXPECT_EQ(r.child("list").item(0).child("x").integer(), 1);
+  EXPECT_EQ(r.child("list").item(1).emit(), "{y: 3}");
+  EXPECT_FALSE(r.has("keep"));             // an empty value removes the key
+  EXPECT_EQ(doc.child("a").integer(), 1);  // the original is unchanged
+
+  const auto message = [&](const std::string& path) {
+    try {
+      doc.replaced({{path, values.child("v1")}});
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message("list[2].x"),
+            "sweep.yaml: v1: index 2 out of range at 'list[2]' (2 items) (line 1)");
+  EXPECT_EQ(message("nothing.x"),
+            "sweep.yaml: v1: no key 'nothing' at 'nothing' in the document (line 1)");
+  EXPECT_EQ(message("a[0]"), "sweep.yaml: v1: 'a[0]' is not a list (line 1)");
+  EXPECT_EQ(message("b..c"), "sweep.yaml: v1: malformed key path 'b..c' (line 1)");
+  EXPECT_EQ(message("[0]"), "sweep.yaml: v1: malformed key path '[0]' (line 1)");
+}
+
 }  // namespace
 }  // namespace sinew

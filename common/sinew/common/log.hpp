@@ -10,6 +10,20 @@ namespace sinew::log {
 
 enum class Level { debug, info, warn, error, off };
 
+// Puts "<name>: " before every message the calling thread logs while it lives (sinew-sweep names
+// the run each thread runs: "[warning] run_0003: hourglass energy is ..."). Restores the previous
+// context when it ends.
+class ScopedContext {
+ public:
+  explicit ScopedContext(const std::string& name);
+  ~ScopedContext();
+  ScopedContext(const ScopedContext&) = delete;
+  ScopedContext& operator=(const ScopedContext&) = delete;
+
+ private:
+  std::string previous_;
+};
+
 // The process-wide logger ("sinew"), created on first use, writing to stderr.
 spdlog::logger& logger();
 void set_level(Level level);

@@ -190,6 +190,102 @@ ConfigError YamlNode::unknown_name(std::string_view what, const std::string& tex
   return error(fmt::format("unknown {} '{}' (expected one of: {})", what, text, list));
 }
 
+std::string YamlNode::emit() const {
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Flow);
+  out.SetSeqFormat(YAML::Flow);
+  out << state_->node;
+  return out.c_str();
+}
+
+namespace {
+
+// One step of a key path: a map key or a list index.
+struct PathStep {
+  std::string key;
+  std::optional<std::size_t> index;
+};
+
+// "a.b[2].c" -> a, b, [2], c; none for a malformed path.
+std::optional<std::vector<PathStep>> split_key_path(const std::string& path) {
+  std::vector<PathStep> steps;
+  std::size_t i = 0;
+  while (i < path.size()) {
+    if (path[i] == '[') {
+      const auto close = path.find(']', i);
+      if (close == std::string::npos || close == i + 1 || steps.empty()) return std::nullopt;
+      const auto digits = path.substr(i + 1, close - i - 1);
+      if (!std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+        return std::nullopt;
+      steps.push_back({"", std::stoul(digits)});
+      i = close + 1;
+      if (i < path.size() && path[i] != '.' && path[i] != '[') return std::nullopt;
+      if (i < path.size() && path[i] == '.') ++i;
+      continue;
+    }
+    const auto end = path.find_first_of(".[", i);
+    const auto key = path.substr(i, end == std::string::npos ? std::string::npos : end - i);
+    if (key.empty()) return std::nullopt;
+    steps.push_back({key, std::nullopt});
+    if (end == std::string::npos) break;
+    i = path[end] == '.' ? end + 1 : end;
+    if (path[end] == '.' && i == path.size()) return std::nullopt;
+  }
+  if (steps.empty()) return std::nullopt;
+  return steps;
+}
+
+}  // namespace
+
+std::string YamlNode::replaced(const std::vector<YamlReplacement>& replacements) const {
+  if (!path().empty()) throw error("replaced() must be called on a document's root");
+  // A deep copy of the document for the replacements to edit.
+  YAML::Node doc = YAML::Clone(state_->node);
+  for (const auto& r : replacements) {
+    const auto steps = split_key_path(r.path);
+    if (!steps) throw r.value.error(fmt::format("malformed key path '{}'", r.path));
+    // Walk with raw node handles (yaml-cpp's operator[] on a non-const node would create keys).
+    YAML::Node at = doc;
+    std::string walked;
+    for (std::size_t k = 0; k < steps->size(); ++k) {
+      const auto& s = (*steps)[k];
+      const bool last = k + 1 == steps->size();
+      if (s.index) {
+        walked += fmt::format("[{}]", *s.index);
+        if (!at.IsSequence()) throw r.value.error(fmt::format("'{}' is not a list", walked));
+        if (*s.index >= at.size()) {
+          throw r.value.error(
+              fmt::format("index {} out of range at '{}' ({} items)", *s.index, walked, at.size()));
+        }
+        if (last) {
+          at[*s.index] = YAML::Clone(r.value.state_->node);
+        } else {
+          at.reset(at[*s.index]);
+        }
+        continue;
+      }
+      walked = join_key(walked, s.key);
+      if (!at.IsMap()) {
+        throw r.value.error(fmt::format("the document has no map at '{}' (for key '{}')",
+                                        walked.substr(0, walked.size() - s.key.size()), s.key));
+      }
+      if (last && r.value.state_->node.IsNull()) {
+        at.remove(s.key);  // an empty value removes the key: the reader's default applies
+      } else if (last) {
+        at[s.key] = YAML::Clone(r.value.state_->node);
+      } else {
+        const YAML::Node& cat = at;
+        if (!cat[s.key].IsDefined() || cat[s.key].IsNull())
+          throw r.value.error(fmt::format("no key '{}' at '{}' in the document", s.key, walked));
+        at.reset(at[s.key]);
+      }
+    }
+  }
+  YAML::Emitter out;
+  out << doc;
+  return std::string(out.c_str()) + "\n";
+}
+
 YamlNode parse_yaml(const std::string& text, const std::string& file) {
   YAML::Node root;
   try {

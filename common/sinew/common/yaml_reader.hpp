@@ -33,6 +33,8 @@ class Node;
 
 namespace sinew {
 
+struct YamlReplacement;
+
 class YamlNode {
  public:
   // The file name given to parse_yaml, as written ("" for text without a file).
@@ -78,6 +80,20 @@ class YamlNode {
   bool boolean() const;
   std::array<double, 3> vec3() const;  // a list of exactly 3 numbers [x, y, z]
 
+  // The node as YAML text on one line, in flow style ("0.5", "[0, 0, -9.81]", "{ramp: 0.1}").
+  std::string emit() const;
+
+  // Editing, for documents made from other documents (sinew-sweep writes one scene per run from
+  // a base scene): this document (the node must be parse_yaml's root), copied, with the value at
+  // each key path replaced by a copy of the given node, as YAML text (comments are not kept). A key path is
+  // what path() gives: "damping", "muscles.frontalis_l.peak", "probes[2].point". Every map on the
+  // way must exist and every list index must be in range; the last key of a map may be new (the
+  // reader of the result checks it is allowed). A path that does not lead into the document
+  // throws the ConfigError of the replacing node (its file and key): "no key 'x' at 'a.x' in the
+  // document", "index 4 out of range at 'probes[4]' (3 items)", "malformed key path". An empty
+  // value (`~`) for a map key removes the key, so the reader's default applies.
+  std::string replaced(const std::vector<YamlReplacement>& replacements) const;
+
   // The value of a name table (names.hpp) whose name the text is, else
   // "unknown <what> '<text>' (expected one of: a, b, c)".
   template <typename T, std::size_t N>
@@ -98,6 +114,12 @@ class YamlNode {
                            const std::string& list) const;
 
   std::shared_ptr<const State> state_;
+};
+
+// One replacement for YamlNode::replaced(): the key path in the document and the new value.
+struct YamlReplacement {
+  std::string path;
+  YamlNode value;
 };
 
 // Parses YAML text into its root node. `file` names the text in every message. A syntax error

@@ -40,6 +40,9 @@ std::unique_ptr<Backend> make_cuda_backend(const formats::Model& model, const Se
   return detail::make_cuda_engine(model, setup, std::move(plan), options);
 }
 #else
+int cuda_device_count() {
+  return 0;
+}
 bool cuda_device_available() {
   return false;
 }

@@ -57,6 +57,8 @@ struct CudaOptions {
 
 // True when the CUDA runtime sees at least one device (false when built without CUDA).
 bool cuda_device_available();
+// The number of devices the CUDA runtime sees (0 when built without CUDA or without a device).
+int cuda_device_count();
 // "NVIDIA H200 (sm_90, 132 SMs, 139.8 GiB)" or "" without a device.
 std::string cuda_device_name();
 

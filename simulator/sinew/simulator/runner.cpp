@@ -128,8 +128,17 @@ std::string hourglass_warning(const Energies& e) {
 }  // namespace
 
 void install_interrupt_handlers() {
+  clear_interrupt();
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+}
+
+bool interrupt_requested() {
+  return g_interrupt.load() != 0;
+}
+
+void clear_interrupt() {
+  g_interrupt.store(0);
 }
 
 RunResult run_scene(const RunOptions& options) {
@@ -180,7 +189,9 @@ RunResult run_scene(const RunOptions& options) {
 
   std::unique_ptr<Backend> backend;
   try {
-    backend = cuda ? make_cuda_backend(model, setup) : make_cpu_backend(model, setup);
+    CudaOptions cuda_options;
+    cuda_options.device = options.cuda_device;
+    backend = cuda ? make_cuda_backend(model, setup, cuda_options) : make_cpu_backend(model, setup);
   } catch (const ConfigError& e) {
     // The engine names Setup fields; point at the scene key the user wrote instead.
     if (!e.file().empty()) throw;
@@ -366,7 +377,6 @@ RunResult run_scene(const RunOptions& options) {
   }
   write_summary();
 
-  g_interrupt.store(0);
   ProgressOptions popt;
   popt.quiet = options.quiet;
   popt.unit = "steps";

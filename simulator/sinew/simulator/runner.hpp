@@ -24,6 +24,7 @@ struct RunOptions {
   std::string device = "auto";         // cpu | cuda | auto
   std::optional<Precision> precision;  // overrides the scene's
   int threads = 0;                     // 0: OpenMP's default
+  int cuda_device = 0;                 // the CUDA device the run uses (cuda or auto)
   bool quiet = false;                  // no progress bar
   bool explain = false;                // print the plan first
   bool run = true;                     // false: stop after the plan
@@ -57,6 +58,11 @@ inline constexpr double kHourglassWarningShare = 0.10;
 RunResult run_scene(const RunOptions& options);
 
 // Installs SIGINT/SIGTERM handlers that ask a running loop to stop (the tool calls it once).
+// Every run_scene in flight, in any thread, stops at its next step boundary; the request stays
+// set (interrupt_requested()) until clear_interrupt(), so a caller that runs scenes one after the
+// other (sinew-sweep) sees it too.
 void install_interrupt_handlers();
+bool interrupt_requested();
+void clear_interrupt();
 
 }  // namespace sinew::simulator

@@ -11,13 +11,17 @@
 
 namespace sinew::simulator {
 
-bool cuda_device_available() {
+int cuda_device_count() {
   int count = 0;
   if (cudaGetDeviceCount(&count) != cudaSuccess) {
     cudaGetLastError();
-    return false;
+    return 0;
   }
-  return count > 0;
+  return count;
+}
+
+bool cuda_device_available() {
+  return cuda_device_count() > 0;
 }
 
 namespace detail {
