@@ -254,6 +254,7 @@ RunResult run_scene(const RunOptions& options) {
                  f == OutputField::energy_density;
         });
     text += describe(estimate_run(*backend, resolved, counts, element_fields));
+    if (options.explain_more) text += options.explain_more(model, plan);
     print(text);
   }
   if (!options.run) return result;

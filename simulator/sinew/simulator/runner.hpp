@@ -13,6 +13,8 @@
 #include <optional>
 #include <string>
 
+#include "sinew/formats/model.hpp"
+#include "sinew/simulator/plan.hpp"
 #include "sinew/simulator/run_summary.hpp"
 #include "sinew/simulator/scene.hpp"
 
@@ -35,6 +37,9 @@ struct RunOptions {
   std::int64_t stop_at_step = -1;
   // Receives the plan text (default: stdout).
   std::function<void(const std::string&)> print;
+  // With `explain`: more text appended to the plan from the model and plan (sinew-simulate --parts
+  // prints the partition of sinew::partition this way; the simulator does not depend on it).
+  std::function<std::string(const formats::Model&, const Plan&)> explain_more;
 };
 
 struct RunResult {
