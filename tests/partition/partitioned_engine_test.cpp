@@ -171,20 +171,51 @@ TEST_P(PartitionedEngine, InstabilityStopsAtTheSameStepWithTheSameMessage) {
   expect_same_bits(one->displacements(), parts->displacements(), "u at the instability");
 }
 
-TEST(PartitionedEngineInput, UnsupportedEffectsAreRefusedByName) {
+// The forehead-like slab with everything its brow raise uses: muscles, every bottom node sliding
+// on the curved skull, gravity, damping, the y_max edge rigid (the CUDA tests' scene).
+TEST_P(PartitionedEngine, SlidingContractingForeheadUnderGravityGivesTheOneDeviceBits) {
+  const auto m = simulator::make_forehead_model(24, 12, 4, 0.5e-3);
+  SimSetup s;
+  s.precision = GetParam();
+  s.duration = 1;
+  s.effects.muscles = true;
+  s.effects.sliding = true;
+  s.effects.damping = true;
+  s.effects.gravity = true;
+  s.damping_alpha = 200;
+  s.activation = {Curve::ramp(2e-3, 0.05), Curve::ramp(3e-3, 0.025)};
+  for (const auto& ns : m.node_sets)
+    if (ns.name == "y_max") s.rigid_nodes = ns.ids;
+  EXPECT_GT(compare(m, s, 400, 2), 1e-7);
+  // Cut in two through a checkpoint: the sliding triangles come from their owners.
+  auto one = simulator::make_cpu_backend(m, s);
+  one->step(250);
+  auto first = make_partitioned_cpu_backend(m, s, MPI_COMM_WORLD);
+  first->step(120);
+  const auto state = first->state();
+  auto second = make_partitioned_cpu_backend(m, s, MPI_COMM_WORLD);
+  second->restore(state);
+  second->step(130);
+  expect_same_bits(one->displacements(), second->displacements(), "u after restart");
+  EXPECT_EQ(one->state().sliding_triangle, second->state().sliding_triangle);
+}
+
+TEST(PartitionedEngineInput, ASlidingNodeWithALoadIsRefusedByName) {
   const auto m = simulator::make_forehead_model(24, 12, 4, 0.5e-3);
   SimSetup s;
   s.duration = 1;
   s.effects.sliding = true;
+  s.effects.loads = true;
+  simulator::NodalForce f;
+  f.nodes = {m.sliding.front().node};
+  f.total = {0, 0, 1e-3};
+  s.forces.push_back(f);
   try {
     make_partitioned_cpu_backend(m, s, MPI_COMM_WORLD);
-    FAIL() << "sliding accepted";
+    FAIL() << "a sliding node with a load accepted";
   } catch (const ConfigError& e) {
-    EXPECT_EQ(e.field(), "effects.sliding");
+    EXPECT_EQ(e.field(), "forces");
   }
-  s.effects.sliding = false;
-  s.effects.gravity = true;
-  EXPECT_THROW(make_partitioned_cpu_backend(m, s, MPI_COMM_WORLD), ConfigError);
 }
 
 INSTANTIATE_TEST_SUITE_P(Precisions, PartitionedEngine,

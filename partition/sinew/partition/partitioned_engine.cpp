@@ -68,12 +68,16 @@ class PartitionedCpuEngine final : public simulator::Backend {
   double time() const override { return core_.time(step_); }
   double dt() const override { return core_.dt(); }
   State state() const override {
-    return core_.make_state(step_, whole(u_), whole(up_), a_.slide_triangle, external_work_);
+    return core_.make_state(step_, whole(u_), whole(up_), sliding_triangles(), external_work_);
   }
   void restore(const State& s) override {
     core_.check_state(s);
     u_ = simulator::unflatten<T>(s.u);
     up_ = simulator::unflatten<T>(s.u_prev);
+    slide_triangle_ = s.sliding_triangle;
+    search_triangle_ = s.sliding_triangle;
+    // Lists are a cache: the grid search gives the same triangles.
+    std::fill(list_count_.begin(), list_count_.end(), -1);
     step_ = s.step;
     external_work_ = s.external_work;
     core_.set_energy_reference(s.energy_reference);
@@ -117,6 +121,8 @@ class PartitionedCpuEngine final : public simulator::Backend {
   }
 
  private:
+  // Every binding's closest triangle, from its owner.
+  std::vector<Index> sliding_triangles() const;
   // v with every node's value from its owner (the owned values of every rank gathered).
   std::vector<Vec3<T>> whole(const std::vector<Vec3<T>>& v) const;
   // The element forces of this part's elements at u(n) (J of each into jacobian_).
@@ -148,12 +154,22 @@ class PartitionedCpuEngine final : public simulator::Backend {
   // Per plan collection: this part's elements next to nodes other parts need (boundary) and the
   // rest (interior), in collection order.
   std::vector<std::vector<Index>> boundary_elements_, interior_elements_;
-  std::vector<Index> boundary_nodes_, interior_nodes_;      // owned: sent to a neighbour, or not
-  std::vector<double> jacobian_;                            // E, J of the computed elements
-  std::vector<std::int32_t> entry_of_node_;                 // N, constraint entry of a node or −1
-  std::vector<std::vector<std::int32_t>> entries_of_part_;  // constrained entries per owner
-  bool work_ops_ = false;  // the program has nodal forces or prescribed displacements
-  std::vector<int> owned_counts_, owned_displs_;  // scalars per part (3 per owned node)
+  std::vector<Index> boundary_nodes_, interior_nodes_;  // owned: sent to a neighbour, or not
+  std::vector<double> jacobian_;                        // E, J of the computed elements
+  std::vector<std::int32_t> entry_of_node_;             // N, constraint entry of a node or −1
+  // Constraint entries with nodal forces or prescribed displacements (the only ops adding work),
+  // per owner part.
+  std::vector<std::vector<std::int32_t>> work_entries_of_part_;
+  bool work_ops_ = false;
+  // Sliding: per binding its closest triangle, warm start, candidate list and anchor (the CPU
+  // engine's), kept by the binding's owner; the surfaces (read-only) on every rank.
+  std::vector<simulator::SlideSurface<T>> slide_surfaces_;
+  std::vector<std::int32_t> slide_triangle_, search_triangle_, list_count_, list_;
+  std::vector<T> list_distance_;
+  std::vector<Vec3<T>> anchor_;
+  std::vector<int> binding_counts_, binding_displs_;  // per part, for state()
+  std::vector<std::int32_t> bindings_by_owner_;       // binding ids, part by part
+  std::vector<int> owned_counts_, owned_displs_;      // scalars per part (3 per owned node)
   std::vector<T> activation_, scalars_;
   std::vector<Vec3<T>> elem_force_, f_, prescribed_free_, ustar_;
   std::vector<std::vector<T>> send_buf_, recv_buf_;
@@ -206,15 +222,42 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
   }
   const auto& c = a_.constraints;
   entry_of_node_.assign(n_, -1);
-  entries_of_part_.resize(std::size_t(size_));
+  work_entries_of_part_.resize(std::size_t(size_));
   for (std::size_t k = 0; k < c.node.size(); ++k) {
     entry_of_node_[std::size_t(c.node[k])] = std::int32_t(k);
-    entries_of_part_[std::size_t(partition_.node_owner[std::size_t(c.node[k])])].push_back(
-        std::int32_t(k));
+    bool work = false, slide = false;
     for (std::int32_t q = c.offset[k]; q < c.offset[k + 1]; ++q) {
       const std::int32_t kind = c.op[std::size_t(q)] >> simulator::kOpShift;
-      if (kind == simulator::kOpForce || kind == simulator::kOpPrescribe) work_ops_ = true;
+      work = work || kind == simulator::kOpForce || kind == simulator::kOpPrescribe;
+      slide = slide || kind == simulator::kOpSlide;
     }
+    // The work replay runs the program of loaded nodes on every rank, and a sliding node's lists
+    // live on its owner only.
+    if (work && slide)
+      throw ConfigError("", "forces",
+                        fmt::format("node {} slides and carries a load or prescribed "
+                                    "displacement: not yet supported by the partitioned engine",
+                                    c.node[k]));
+    if (work)
+      work_entries_of_part_[std::size_t(partition_.node_owner[std::size_t(c.node[k])])].push_back(
+          std::int32_t(k));
+    work_ops_ = work_ops_ || work;
+  }
+  for (const auto& sf : a_.surfaces)
+    slide_surfaces_.push_back({sf.view(), sf.triangle_corners.data(), sf.skin});
+  const std::size_t slides = a_.slide_node.size();
+  slide_triangle_ = a_.slide_triangle;
+  search_triangle_ = a_.slide_triangle;
+  list_count_.assign(slides, -1);
+  list_.resize(slides * simulator::kCandidates);
+  list_distance_.resize(slides * simulator::kCandidates);
+  anchor_.resize(slides);
+  for (int p = 0; p < size_; ++p) {
+    binding_displs_.push_back(int(bindings_by_owner_.size()));
+    for (std::size_t k = 0; k < slides; ++k)
+      if (partition_.node_owner[std::size_t(a_.slide_node[k])] == p)
+        bindings_by_owner_.push_back(std::int32_t(k));
+    binding_counts_.push_back(int(bindings_by_owner_.size()) - binding_displs_.back());
   }
 
   jacobian_.assign(model.element_count(), 0.0);
@@ -234,12 +277,17 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
     core_.step_scalars(-1, scalars_.data());
     const T* factor = scalars_.data() + core_.muscle_count();
     double w = 0;
-    for (std::int32_t k = 0; k < d.count; ++k) {
-      const std::int32_t i = d.node[k];
-      u_[std::size_t(i)] =
-          simulator::run_program<T, 0>(d, i, d.offset[k], d.offset[k + 1], factor, false,
-                                       u_[std::size_t(i)], up_.data(), false, w);
-    }
+    simulator::dispatch_flags(
+        [&](auto slide) {
+          constexpr int kSlide = decltype(slide)::value ? 1 : 0;
+          for (std::int32_t k = 0; k < d.count; ++k) {
+            const std::int32_t i = d.node[k];
+            u_[std::size_t(i)] =
+                simulator::run_program<T, kSlide>(d, i, d.offset[k], d.offset[k + 1], factor, false,
+                                                  u_[std::size_t(i)], up_.data(), false, w);
+          }
+        },
+        !a_.slide_node.empty());
   }
   up_ = u_;
   for (const auto& v : setup.initial_velocities)
@@ -267,6 +315,21 @@ std::vector<Vec3<T>> PartitionedCpuEngine<T>::whole(const std::vector<Vec3<T>>& 
     for (std::size_t k = 0; k < p.owned_nodes.size(); ++k)
       out[std::size_t(p.owned_nodes[k])] = {from[3 * k], from[3 * k + 1], from[3 * k + 2]};
   }
+  return out;
+}
+
+template <typename T>
+std::vector<Index> PartitionedCpuEngine<T>::sliding_triangles() const {
+  const int first = binding_displs_[std::size_t(rank_)];
+  std::vector<std::int32_t> mine;
+  for (int j = 0; j < binding_counts_[std::size_t(rank_)]; ++j)
+    mine.push_back(slide_triangle_[std::size_t(bindings_by_owner_[std::size_t(first + j)])]);
+  std::vector<std::int32_t> all(bindings_by_owner_.size());
+  check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), MPI_INT32_T, all.data(),
+                           binding_counts_.data(), binding_displs_.data(), MPI_INT32_T, comm_),
+            "MPI_Allgatherv (sliding triangles)");
+  std::vector<Index> out(bindings_by_owner_.size());
+  for (std::size_t j = 0; j < all.size(); ++j) out[std::size_t(bindings_by_owner_[j])] = all[j];
   return out;
 }
 
@@ -308,8 +371,18 @@ void PartitionedCpuEngine<T>::element_forces(const std::vector<std::vector<Index
 template <typename T>
 simulator::ConstraintData<T> PartitionedCpuEngine<T>::constraint_data() {
   const auto& c = a_.constraints;
-  const simulator::SlideData<T> no_slide{nullptr, nullptr, nullptr, nullptr, nullptr, nullptr,
-                                         nullptr, nullptr, nullptr, nullptr, 0,       nullptr};
+  const simulator::SlideData<T> slide{a_.slide_node.data(),
+                                      a_.slide_surface.data(),
+                                      a_.slide_distance.data(),
+                                      slide_triangle_.data(),
+                                      search_triangle_.data(),
+                                      list_count_.data(),
+                                      anchor_.data(),
+                                      list_.data(),
+                                      list_distance_.data(),
+                                      slide_surfaces_.data(),
+                                      std::int32_t(a_.slide_node.size()),
+                                      nullptr};
   return {c.node.data(),
           c.offset.data(),
           c.op.data(),
@@ -322,9 +395,9 @@ simulator::ConstraintData<T> PartitionedCpuEngine<T>::constraint_data() {
           c.prescribed_mask.data(),
           prescribed_free_.data(),
           c.plane_normal.data(),
-          no_slide,
+          slide,
           a_.rest.data(),
-          nullptr,
+          a_.gravity.empty() ? nullptr : a_.gravity.data(),
           std::int32_t(c.force_per_node.size())};
 }
 
@@ -334,71 +407,112 @@ void PartitionedCpuEngine<T>::update_nodes(const std::vector<Index>& list, const
   const simulator::NodeData<T> d = a_.node_data(cd_);
   const simulator::ConstraintData<T> cdata = constraint_data();
   std::vector<Index> first_bad(simulator::chunk_count(list.size()), INT_MAX);
-  simulator::for_each_chunk<T>(
-      list.size(), threads_, [&](std::size_t c, std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k) {
-          const std::int32_t i = list[k];
-          const Vec3<T> f = simulator::node_internal_force(d, elem_force_.data(), i);
-          f_[std::size_t(i)] = f;
-          Vec3<T> v = simulator::advance_node<T, false>(
-              d, i, f, u_[std::size_t(i)], up_[std::size_t(i)], a_.inverse_mass[std::size_t(i)]);
-          if (!simulator::all_finite(v)) first_bad[c] = std::min(first_bad[c], Index(i));
-          const std::int32_t entry = entry_of_node_[std::size_t(i)];
-          if (entry >= 0) {
-            ustar_[std::size_t(i)] = v;
-            double w = 0;  // the work is constraint_work's
-            v = simulator::run_program<T, 0>(cdata, i, cdata.offset[entry], cdata.offset[entry + 1],
-                                             factor, true, v, up_.data(), false, w);
-          }
-          un_[std::size_t(i)] = v;
-        }
-      });
+  simulator::dispatch_flags(
+      [&](auto gravity, auto slide) {
+        constexpr bool kGravity = decltype(gravity)::value;
+        constexpr int kSlide = decltype(slide)::value ? 1 : 0;  // lists refreshed inline
+        simulator::for_each_chunk<T>(
+            list.size(), threads_, [&](std::size_t c, std::size_t begin, std::size_t end) {
+              for (std::size_t k = begin; k < end; ++k) {
+                const std::int32_t i = list[k];
+                const std::size_t ii = std::size_t(i);
+                const Vec3<T> f = simulator::node_internal_force(d, elem_force_.data(), i);
+                f_[ii] = f;
+                Vec3<T> v = simulator::advance_node<T, kGravity>(d, i, f, u_[ii], up_[ii],
+                                                                 a_.inverse_mass[ii]);
+                if (!simulator::all_finite(v)) first_bad[c] = std::min(first_bad[c], Index(i));
+                const std::int32_t entry = entry_of_node_[ii];
+                if (entry >= 0) {
+                  ustar_[ii] = v;
+                  double w = 0;  // the work is constraint_work's
+                  v = simulator::run_program<T, kSlide>(cdata, i, cdata.offset[entry],
+                                                        cdata.offset[entry + 1], factor, true, v,
+                                                        up_.data(), false, w);
+                }
+                un_[ii] = v;
+              }
+            });
+      },
+      core_.setup().effects.gravity, !a_.slide_node.empty());
   for (Index b : first_bad) bad = std::min(bad, b);
 }
 
 template <typename T>
 double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
   const simulator::ConstraintData<T> d = constraint_data();
-  if (!work_ops_) return 0.0;  // nothing adds work: the one-device sum of zero chunks
-  // (u*, u(n−1)) of every constrained entry, from its owner.
-  std::vector<int> counts, displs;
-  for (const auto& e : entries_of_part_) {
-    displs.push_back(counts.empty() ? 0 : displs.back() + counts.back());
-    counts.push_back(int(6 * e.size()));
-  }
-  std::vector<T> mine;
-  for (std::int32_t k : entries_of_part_[std::size_t(rank_)]) {
-    const std::size_t i = std::size_t(d.node[k]);
-    for (int c = 0; c < 3; ++c) mine.push_back(ustar_[i][c]);
-    for (int c = 0; c < 3; ++c) mine.push_back(up_[i][c]);
-  }
-  std::vector<T> all(std::size_t(displs.back() + counts.back()));
-  check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), mpi_scalar<T>(), all.data(),
-                           counts.data(), displs.data(), mpi_scalar<T>(), comm_),
-            "MPI_Allgatherv (constrained nodes)");
-  std::vector<Vec3<T>> vstar(std::size_t(d.count)), vprev(std::size_t(d.count));
-  for (std::size_t p = 0; p < entries_of_part_.size(); ++p) {
-    const T* from = all.data() + displs[p];
-    for (std::size_t j = 0; j < entries_of_part_[p].size(); ++j) {
-      const std::size_t k = std::size_t(entries_of_part_[p][j]);
-      vstar[k] = {from[6 * j], from[6 * j + 1], from[6 * j + 2]};
-      vprev[k] = {from[6 * j + 3], from[6 * j + 4], from[6 * j + 5]};
-    }
-  }
-  // u(n−1) of every constrained node is now its owner's (the true value on every rank).
-  for (std::int32_t k = 0; k < d.count; ++k) up_[std::size_t(d.node[k])] = vprev[std::size_t(k)];
-  // The CPU engine's apply_constraints, chunk by chunk.
-  std::vector<double> partial(simulator::chunk_count(std::size_t(d.count)), 0.0);
-  for (std::size_t c = 0; c < partial.size(); ++c) {
-    double w = 0;
-    const std::size_t end = std::min(std::size_t(d.count), (c + 1) * kChunk);
-    for (std::size_t k = c * kChunk; k < end; ++k)
-      simulator::run_program<T, 0>(d, d.node[k], d.offset[k], d.offset[k + 1], factor, true,
-                                   vstar[k], up_.data(), true, w);
-    partial[c] = w;
-  }
   double work = 0;
-  for (double p : partial) work += p;
+  if (work_ops_) {
+    // (u*, u(n−1)) of every loaded entry, from its owner.
+    std::vector<int> counts, displs;
+    for (const auto& e : work_entries_of_part_) {
+      displs.push_back(counts.empty() ? 0 : displs.back() + counts.back());
+      counts.push_back(int(6 * e.size()));
+    }
+    std::vector<T> mine;
+    for (std::int32_t k : work_entries_of_part_[std::size_t(rank_)]) {
+      const std::size_t i = std::size_t(d.node[k]);
+      for (int c = 0; c < 3; ++c) mine.push_back(ustar_[i][c]);
+      for (int c = 0; c < 3; ++c) mine.push_back(up_[i][c]);
+    }
+    std::vector<T> all(std::size_t(displs.back() + counts.back()));
+    check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), mpi_scalar<T>(), all.data(),
+                             counts.data(), displs.data(), mpi_scalar<T>(), comm_),
+              "MPI_Allgatherv (loaded nodes)");
+    std::vector<Vec3<T>> vstar(std::size_t(d.count));
+    std::vector<char> loaded(std::size_t(d.count), 0);
+    for (std::size_t p = 0; p < work_entries_of_part_.size(); ++p) {
+      const T* from = all.data() + displs[p];
+      for (std::size_t j = 0; j < work_entries_of_part_[p].size(); ++j) {
+        const std::size_t k = std::size_t(work_entries_of_part_[p][j]);
+        vstar[k] = {from[6 * j], from[6 * j + 1], from[6 * j + 2]};
+        // u(n−1) of a loaded node is now its owner's (its true value, on every rank).
+        up_[std::size_t(d.node[k])] = {from[6 * j + 3], from[6 * j + 4], from[6 * j + 5]};
+        loaded[k] = 1;
+      }
+    }
+    // The CPU engine's apply_constraints, chunk by chunk; the other entries add nothing.
+    std::vector<double> partial(simulator::chunk_count(std::size_t(d.count)), 0.0);
+    for (std::size_t c = 0; c < partial.size(); ++c) {
+      double w = 0;
+      const std::size_t end = std::min(std::size_t(d.count), (c + 1) * kChunk);
+      for (std::size_t k = c * kChunk; k < end; ++k)
+        if (loaded[k])
+          simulator::run_program<T, 0>(d, d.node[k], d.offset[k], d.offset[k + 1], factor, true,
+                                       vstar[k], up_.data(), true, w);
+      partial[c] = w;
+    }
+    for (double p : partial) work += p;
+  }
+  if (core_.setup().effects.gravity) {
+    // The weights' work, centred: g · (u(n+1) − u(n−1)) / 2, per node, summed per chunk of 1024
+    // nodes in id order as the CPU engine sums it: every node's three terms from its owner.
+    const Part& part = partition_.parts[std::size_t(rank_)];
+    std::vector<double> mine(3 * part.owned_nodes.size());
+    for (std::size_t k = 0; k < part.owned_nodes.size(); ++k) {
+      const std::size_t i = std::size_t(part.owned_nodes[k]);
+      for (int c = 0; c < 3; ++c)
+        mine[3 * k + std::size_t(c)] =
+            double(a_.gravity[i][c]) * 0.5 * (double(un_[i][c]) - double(up_[i][c]));
+    }
+    std::vector<double> all(3 * n_), terms(3 * n_);
+    check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), MPI_DOUBLE, all.data(),
+                             owned_counts_.data(), owned_displs_.data(), MPI_DOUBLE, comm_),
+              "MPI_Allgatherv (gravity work)");
+    for (const auto& p : partition_.parts) {
+      const double* from = all.data() + owned_displs_[std::size_t(p.index)];
+      for (std::size_t k = 0; k < p.owned_nodes.size(); ++k)
+        for (std::size_t c = 0; c < 3; ++c)
+          terms[3 * std::size_t(p.owned_nodes[k]) + c] = from[3 * k + c];
+    }
+    std::vector<double> partial(simulator::chunk_count(n_), 0.0);
+    for (std::size_t c = 0; c < partial.size(); ++c) {
+      double s = 0;
+      for (std::size_t i = c * kChunk; i < std::min(n_, (c + 1) * kChunk); ++i)
+        for (std::size_t k = 0; k < 3; ++k) s += terms[3 * i + k];
+      partial[c] = s;
+    }
+    for (double p : partial) work += p;
+  }
   return work;
 }
 
@@ -568,13 +682,6 @@ void PartitionedCpuEngine<T>::single_step() {
 std::unique_ptr<simulator::Backend> make_partitioned_cpu_backend(const formats::Model& model,
                                                                  const simulator::Setup& setup,
                                                                  MPI_Comm comm) {
-  if (setup.effects.gravity)
-    throw ConfigError("", "effects.gravity",
-                      "gravity is not yet supported by the partitioned engine (docs/multi-gpu.md)");
-  if (setup.effects.sliding && !model.sliding.empty())
-    throw ConfigError("", "effects.sliding",
-                      "sliding surfaces are not yet supported by the partitioned engine "
-                      "(docs/multi-gpu.md)");
   Plan plan = simulator::make_plan(model, setup);
   int rank = 0;
   MPI_Comm_rank(comm, &rank);

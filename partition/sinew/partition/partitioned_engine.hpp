@@ -14,14 +14,15 @@
 // they are the same bits: the smallest J (every step: each rank's primary elements, the ranks'
 // results merged in collection order), the first non-finite node (every step, MPI_MIN), the
 // external work (every rank replays the whole constraint program from the gathered u* of the
-// constrained nodes, when it has loads), and at energy steps the kinetic, strain and hourglass
+// loaded nodes; the weights' work from every node's terms gathered), and at energy steps the kinetic, strain and hourglass
 // energies (u and u(n−1) gathered whole; chunks of 1024 elements dealt to the ranks, their sums
 // gathered and added in order).
 //
 // Every Backend method is collective: all ranks call the same methods in the same order, and each
 // gets the whole result (displacements, energies, state, fields). A checkpoint holds the whole
 // state, so it restarts on any number of ranks.
-// Not yet: gravity and sliding surfaces (ConfigError naming the effect).
+// Sliding nodes belong to the part owning them (their lists and warm starts live there); the
+// surfaces are on every rank. Not yet: a node that both slides and carries a load (ConfigError).
 #include <memory>
 
 #include <mpi.h>
@@ -33,7 +34,7 @@
 namespace sinew::partition {
 
 // The partitioned CPU backend on `comm` (one part per rank, make_partition with work_of). Collective.
-// Throws ConfigError for a bad Setup (as make_cpu_backend) or an effect it does not support yet.
+// Throws ConfigError for a bad Setup (as make_cpu_backend) or a sliding node with a load.
 std::unique_ptr<simulator::Backend> make_partitioned_cpu_backend(const formats::Model& model,
                                                                  const simulator::Setup& setup,
                                                                  MPI_Comm comm);
