@@ -180,7 +180,10 @@ RunResult run_scene(const RunOptions& options) {
 
   std::unique_ptr<Backend> backend;
   try {
-    backend = cuda ? make_cuda_backend(model, setup) : make_cpu_backend(model, setup);
+    if (options.make_backend) cuda = false;  // the caller's engine, on the host
+    backend = options.make_backend ? options.make_backend(model, setup)
+              : cuda               ? make_cuda_backend(model, setup)
+                                   : make_cpu_backend(model, setup);
   } catch (const ConfigError& e) {
     // The engine names Setup fields; point at the scene key the user wrote instead.
     if (!e.file().empty()) throw;

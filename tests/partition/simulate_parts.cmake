@@ -1,0 +1,46 @@
+# sinew-simulate-parts under mpirun against sinew-simulate --device cpu (ctest:
+# partition_simulate_parts): the box compression scene (data/scenes/box_compression.yaml) on 2 and
+# 3 parts gives probe files identical byte for byte (17 significant digits: the same bits) and a
+# completed summary; a bad scene fails on every rank with the error named and a non-zero status.
+# Inputs: -DSIMULATE=<sinew-simulate> -DPARTS=<sinew-simulate-parts> -DMPIEXEC=<mpirun>
+#         -DGENERATE=<sinew-generate> -DSCENES=<data/scenes> -DWORK=<dir>
+cmake_minimum_required(VERSION 3.20)
+
+function(expect message)
+  if(NOT (${ARGN}))
+    message(FATAL_ERROR "FAILED: ${message}")
+  endif()
+endfunction()
+
+include("${CMAKE_CURRENT_LIST_DIR}/../simulator/compression_block.cmake")
+set(mpirun "${MPIEXEC}" --oversubscribe --allow-run-as-root)
+
+execute_process(COMMAND "${SIMULATE}" "${WORK}/box_compression.yaml" -o "${WORK}/one" --quiet
+                        --threads 1 --device cpu
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+expect("sinew-simulate exits 0 (stderr: ${err})" rc EQUAL 0)
+foreach(parts 2 3)
+  execute_process(COMMAND ${mpirun} -n ${parts} "${PARTS}" "${WORK}/box_compression.yaml"
+                          -o "${WORK}/parts${parts}" --quiet --threads 1
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  expect("sinew-simulate-parts on ${parts} ranks exits 0 (${out} ${err})" rc EQUAL 0)
+  foreach(probe probe_lid_force.csv probe_bulge.csv)
+    execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files "${WORK}/one/${probe}"
+                            "${WORK}/parts${parts}/${probe}" RESULT_VARIABLE same)
+    expect("${probe} on ${parts} parts is the one-device file byte for byte" same EQUAL 0)
+  endforeach()
+  file(READ "${WORK}/parts${parts}/run_summary.json" summary)
+  string(JSON status GET "${summary}" status)
+  string(JSON device GET "${summary}" device)
+  expect("summary status completed (got ${status})" status STREQUAL completed)
+  string(FIND "${device}" "${parts} parts" pos)
+  expect("the summary names the parts (got ${device})" pos GREATER -1)
+endforeach()
+
+# A scene naming a model that does not exist: an error naming the key, non-zero on every rank.
+file(WRITE "${WORK}/bad.yaml" "title: bad\nmodel: missing.h5\neffects: [elasticity]\nduration: 0.1\n")
+execute_process(COMMAND ${mpirun} -n 2 "${PARTS}" "${WORK}/bad.yaml" -o "${WORK}/bad" --quiet
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("a bad scene exits non-zero" NOT rc EQUAL 0)
+string(FIND "${out}${err}" "missing.h5" pos)
+expect("the error names the missing model (${out}${err})" pos GREATER -1)
