@@ -71,6 +71,24 @@ double compare(const formats::Model& m, const SimSetup& s, std::int64_t steps, i
   return moved;
 }
 
+// The forehead-like slab's brow raise (the CUDA tests' scene): muscles ramping up, damping, the
+// y_max edge rigid; with `skull`, its bottom nodes sliding on the curved skull under gravity.
+SimSetup forehead_setup(const formats::Model& m, Precision p, bool skull,
+                        double activation = 0.05) {
+  SimSetup s;
+  s.precision = p;
+  s.duration = 1;
+  s.effects.muscles = true;
+  s.effects.damping = true;
+  s.effects.sliding = skull;
+  s.effects.gravity = skull;
+  s.damping_alpha = 200;
+  s.activation = {Curve::ramp(2e-3, activation), Curve::ramp(3e-3, activation / 2)};
+  for (const auto& ns : m.node_sets)
+    if (ns.name == "y_max") s.rigid_nodes = ns.ids;
+  return s;
+}
+
 class PartitionedEngine : public ::testing::TestWithParam<Precision> {};
 
 // The cantilever of the verification suite (rigid root, tip load ramped by nodal forces, damping,
@@ -112,15 +130,7 @@ TEST_P(PartitionedEngine, LayeredSkinBlockUnderPrescribedStretchGivesTheOneDevic
 // y_max edge rigid, without its sliding skull.
 TEST_P(PartitionedEngine, ContractingMusclesGiveTheOneDeviceBits) {
   const auto m = simulator::make_forehead_model(24, 12, 4, 0.5e-3);
-  SimSetup s;
-  s.precision = GetParam();
-  s.duration = 1;
-  s.effects.muscles = true;
-  s.effects.damping = true;
-  s.damping_alpha = 200;
-  s.activation = {Curve::ramp(2e-3, 0.05), Curve::ramp(3e-3, 0.025)};
-  for (const auto& ns : m.node_sets)
-    if (ns.name == "y_max") s.rigid_nodes = ns.ids;
+  const SimSetup s = forehead_setup(m, GetParam(), false);
   EXPECT_GT(compare(m, s, 400, 2), 1e-7);
 }
 
@@ -175,17 +185,7 @@ TEST_P(PartitionedEngine, InstabilityStopsAtTheSameStepWithTheSameMessage) {
 // on the curved skull, gravity, damping, the y_max edge rigid (the CUDA tests' scene).
 TEST_P(PartitionedEngine, SlidingContractingForeheadUnderGravityGivesTheOneDeviceBits) {
   const auto m = simulator::make_forehead_model(24, 12, 4, 0.5e-3);
-  SimSetup s;
-  s.precision = GetParam();
-  s.duration = 1;
-  s.effects.muscles = true;
-  s.effects.sliding = true;
-  s.effects.damping = true;
-  s.effects.gravity = true;
-  s.damping_alpha = 200;
-  s.activation = {Curve::ramp(2e-3, 0.05), Curve::ramp(3e-3, 0.025)};
-  for (const auto& ns : m.node_sets)
-    if (ns.name == "y_max") s.rigid_nodes = ns.ids;
+  const SimSetup s = forehead_setup(m, GetParam(), true);
   EXPECT_GT(compare(m, s, 400, 2), 1e-7);
   // Cut in two through a checkpoint: the sliding triangles come from their owners.
   auto one = simulator::make_cpu_backend(m, s);
@@ -205,17 +205,8 @@ TEST_P(PartitionedEngine, SlidingContractingForeheadUnderGravityGivesTheOneDevic
 // checks the gathered state (every rank's verdict is reduced at exit).
 TEST(PartitionedEngineForehead, OneMillimetreBrowRaiseGivesTheOneDeviceBits) {
   const auto m = simulator::make_forehead_model(355, 89, 2, 1e-3);
-  SimSetup s;
-  s.duration = 1;
-  s.effects.muscles = true;
-  s.effects.sliding = true;
-  s.effects.damping = true;
-  s.effects.gravity = true;
-  s.damping_alpha = 200;
+  SimSetup s = forehead_setup(m, Precision::float64, true, 0.3);
   s.mass_scaling = 36;  // the demo's 1 mm run
-  s.activation = {Curve::ramp(2e-3, 0.3), Curve::ramp(2e-3, 0.3)};
-  for (const auto& ns : m.node_sets)
-    if (ns.name == "y_max") s.rigid_nodes = ns.ids;
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   auto parts = make_partitioned_cpu_backend(m, s, MPI_COMM_WORLD);

@@ -1,11 +1,15 @@
 #include "sinew/partition/partitioned_engine.hpp"
 
+#include <fmt/format.h>
 #include <omp.h>
 
 #include <algorithm>
 #include <climits>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <type_traits>
+#include <vector>
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
@@ -74,10 +78,7 @@ class PartitionedCpuEngine final : public simulator::Backend {
     core_.check_state(s);
     u_ = simulator::unflatten<T>(s.u);
     up_ = simulator::unflatten<T>(s.u_prev);
-    slide_triangle_ = s.sliding_triangle;
-    search_triangle_ = s.sliding_triangle;
-    // Lists are a cache: the grid search gives the same triangles.
-    std::fill(list_count_.begin(), list_count_.end(), -1);
+    sliding_.restore(s.sliding_triangle);
     step_ = s.step;
     external_work_ = s.external_work;
     core_.set_energy_reference(s.energy_reference);
@@ -107,10 +108,7 @@ class PartitionedCpuEngine final : public simulator::Backend {
     for (auto v : nodes) set_forces.push_back(f[std::size_t(v)]);
     return core_.reaction(a_, nodes, set_forces.data(), step_);
   }
-  Energies energies() override {
-    Energies e = energies_at(whole(u_), whole(up_));
-    return e;
-  }
+  Energies energies() override { return energies_at(whole(u_), whole(up_)); }
   simulator::ElementFields element_fields() override {
     return core_.element_fields(a_, whole(u_).data(), step_, threads_);
   }
@@ -132,16 +130,17 @@ class PartitionedCpuEngine final : public simulator::Backend {
   // Gather, update, loads and constraints of the listed owned nodes into un_ (pre-constraint values
   // of constrained nodes into ustar_); the lowest node whose update is not finite into `bad`.
   void update_nodes(const std::vector<Index>& list, const T* factor, Index& bad);
-  simulator::ConstraintData<T> constraint_data();
-  // The work of the loads and constraint forces over this step, in the one-device order: every
-  // rank runs the whole constraint program from the gathered u* and u(n−1) of the constrained
-  // nodes.
+  simulator::ConstraintData<T> constraint_data() {
+    return simulator::host_constraint_data(a_, cd_, prescribed_free_.data(), sliding_);
+  }
+  // The external work over this step in the CPU engine's order: the loaded nodes' programs
+  // replayed on every rank from their gathered u* and u(n−1), then the weights' work from every
+  // node's terms, gathered.
   double constraint_work(const T* factor);
   // The smallest J of the run at u(n), merged over the ranks.
   JacobianCheck jacobian_check();
   Energies energies_at(const std::vector<Vec3<T>>& u, const std::vector<Vec3<T>>& up);
   std::vector<Vec3<T>> forces_now();
-  void exchange_halo();
   void single_step();
 
   BackendCore core_;
@@ -161,12 +160,9 @@ class PartitionedCpuEngine final : public simulator::Backend {
   // per owner part.
   std::vector<std::vector<std::int32_t>> work_entries_of_part_;
   bool work_ops_ = false;
-  // Sliding: per binding its closest triangle, warm start, candidate list and anchor (the CPU
-  // engine's), kept by the binding's owner; the surfaces (read-only) on every rank.
-  std::vector<simulator::SlideSurface<T>> slide_surfaces_;
-  std::vector<std::int32_t> slide_triangle_, search_triangle_, list_count_, list_;
-  std::vector<T> list_distance_;
-  std::vector<Vec3<T>> anchor_;
+  // Sliding: the CPU engine's state per binding, kept up to date by the binding's owner only; the
+  // surfaces (read-only) on every rank.
+  simulator::HostSlidingState<T> sliding_;
   std::vector<int> binding_counts_, binding_displs_;  // per part, for state()
   std::vector<std::int32_t> bindings_by_owner_;       // binding ids, part by part
   std::vector<int> owned_counts_, owned_displs_;      // scalars per part (3 per owned node)
@@ -243,15 +239,8 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
           std::int32_t(k));
     work_ops_ = work_ops_ || work;
   }
-  for (const auto& sf : a_.surfaces)
-    slide_surfaces_.push_back({sf.view(), sf.triangle_corners.data(), sf.skin});
+  sliding_ = simulator::HostSlidingState<T>(a_);
   const std::size_t slides = a_.slide_node.size();
-  slide_triangle_ = a_.slide_triangle;
-  search_triangle_ = a_.slide_triangle;
-  list_count_.assign(slides, -1);
-  list_.resize(slides * simulator::kCandidates);
-  list_distance_.resize(slides * simulator::kCandidates);
-  anchor_.resize(slides);
   for (int p = 0; p < size_; ++p) {
     binding_displs_.push_back(int(bindings_by_owner_.size()));
     for (std::size_t k = 0; k < slides; ++k)
@@ -323,7 +312,7 @@ std::vector<Index> PartitionedCpuEngine<T>::sliding_triangles() const {
   const int first = binding_displs_[std::size_t(rank_)];
   std::vector<std::int32_t> mine;
   for (int j = 0; j < binding_counts_[std::size_t(rank_)]; ++j)
-    mine.push_back(slide_triangle_[std::size_t(bindings_by_owner_[std::size_t(first + j)])]);
+    mine.push_back(sliding_.triangle[std::size_t(bindings_by_owner_[std::size_t(first + j)])]);
   std::vector<std::int32_t> all(bindings_by_owner_.size());
   check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), MPI_INT32_T, all.data(),
                            binding_counts_.data(), binding_displs_.data(), MPI_INT32_T, comm_),
@@ -366,39 +355,6 @@ void PartitionedCpuEngine<T>::element_forces(const std::vector<std::vector<Index
                        decltype(hourglass)::value>(lists[k]);
         },
         fx.elasticity, collections[k].muscle, fx.hourglass);
-}
-
-template <typename T>
-simulator::ConstraintData<T> PartitionedCpuEngine<T>::constraint_data() {
-  const auto& c = a_.constraints;
-  const simulator::SlideData<T> slide{a_.slide_node.data(),
-                                      a_.slide_surface.data(),
-                                      a_.slide_distance.data(),
-                                      slide_triangle_.data(),
-                                      search_triangle_.data(),
-                                      list_count_.data(),
-                                      anchor_.data(),
-                                      list_.data(),
-                                      list_distance_.data(),
-                                      slide_surfaces_.data(),
-                                      std::int32_t(a_.slide_node.size()),
-                                      nullptr};
-  return {c.node.data(),
-          c.offset.data(),
-          c.op.data(),
-          std::int32_t(c.node.size()),
-          a_.inverse_mass.data(),
-          cd_,
-          c.force_per_node.data(),
-          c.prescribed_set.data(),
-          c.prescribed_value.data(),
-          c.prescribed_mask.data(),
-          prescribed_free_.data(),
-          c.plane_normal.data(),
-          slide,
-          a_.rest.data(),
-          a_.gravity.empty() ? nullptr : a_.gravity.data(),
-          std::int32_t(c.force_per_node.size())};
 }
 
 template <typename T>
