@@ -1,7 +1,8 @@
 # sinew-simulate-parts under mpirun against sinew-simulate --device cpu (ctest:
 # partition_simulate_parts): the box compression scene (data/scenes/box_compression.yaml) on 2 and
 # 3 parts gives probe files identical byte for byte (17 significant digits: the same bits) and a
-# completed summary; a bad scene fails on every rank with the error named and a non-zero status.
+# completed summary; a bad scene fails on every rank with the error named and a non-zero status;
+# sinew-simulate --explain --parts P prints the partition.
 # Inputs: -DSIMULATE=<sinew-simulate> -DPARTS=<sinew-simulate-parts> -DMPIEXEC=<mpirun>
 #         -DGENERATE=<sinew-generate> -DSCENES=<data/scenes> -DWORK=<dir>
 cmake_minimum_required(VERSION 3.20)
@@ -44,3 +45,19 @@ execute_process(COMMAND ${mpirun} -n 2 "${PARTS}" "${WORK}/bad.yaml" -o "${WORK}
 expect("a bad scene exits non-zero" NOT rc EQUAL 0)
 string(FIND "${out}${err}" "missing.h5" pos)
 expect("the error names the missing model (${out}${err})" pos GREATER -1)
+
+# sinew-simulate --explain --parts P prints the partition; too many parts name the field.
+execute_process(COMMAND "${SIMULATE}" "${WORK}/box_compression.yaml" --explain --parts 3
+                        --device cpu --threads 1
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("--explain --parts 3 exits 0 (${err})" rc EQUAL 0)
+string(FIND "${out}" "Partition: 3 parts, slabs along lattice axis" pos)
+expect("--explain --parts 3 prints the partition (${out})" pos GREATER -1)
+string(FIND "${out}" "exchanged per step:" pos)
+expect("--explain --parts 3 prints the bytes per step" pos GREATER -1)
+execute_process(COMMAND "${SIMULATE}" "${WORK}/box_compression.yaml" --explain --parts 12
+                        --device cpu --threads 1
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("--parts 12 on 9 node layers fails" NOT rc EQUAL 0)
+string(FIND "${out}${err}" "only 9 node layers" pos)
+expect("the error says why (${out}${err})" pos GREATER -1)
