@@ -57,6 +57,13 @@ struct JacobianCheck {
   }
 };
 
+// What every step checks, one all-gather for both: the smallest J at u(n) and the first node whose
+// u(n+1) is not finite (INT_MAX: none).
+struct StepCheck {
+  JacobianCheck jacobian;
+  std::int64_t first_bad = INT_MAX;
+};
+
 template <typename T>
 class PartitionedCpuEngine final : public simulator::Backend {
  public:
@@ -137,8 +144,8 @@ class PartitionedCpuEngine final : public simulator::Backend {
   // replayed on every rank from their gathered u* and u(n−1), then the weights' work from every
   // node's terms, gathered.
   double constraint_work(const T* factor);
-  // The smallest J of the run at u(n), merged over the ranks.
-  JacobianCheck jacobian_check();
+  // The step's checks merged over the ranks; `bad`: this rank's first non-finite node.
+  StepCheck step_check(Index bad);
   Energies energies_at(const std::vector<Vec3<T>>& u, const std::vector<Vec3<T>>& up);
   std::vector<Vec3<T>> forces_now();
   void single_step();
@@ -473,8 +480,10 @@ double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
 }
 
 template <typename T>
-JacobianCheck PartitionedCpuEngine<T>::jacobian_check() {
-  JacobianCheck mine;
+StepCheck PartitionedCpuEngine<T>::step_check(Index bad) {
+  StepCheck check;
+  check.first_bad = bad;
+  JacobianCheck& mine = check.jacobian;
   const auto& collections = core_.plan().collections;
   for (std::size_t k = 0; k < collections.size(); ++k) {
     const auto& list = collections[k].elements;
@@ -484,15 +493,18 @@ JacobianCheck PartitionedCpuEngine<T>::jacobian_check() {
         mine.track(jacobian_[e], std::int64_t(e), (std::int64_t(k) << 40) + std::int64_t(pos));
     }
   }
-  std::vector<JacobianCheck> all(static_cast<std::size_t>(size_));
-  check_mpi(MPI_Allgather(&mine, sizeof(JacobianCheck), MPI_BYTE, all.data(), sizeof(JacobianCheck),
+  std::vector<StepCheck> all(static_cast<std::size_t>(size_));
+  check_mpi(MPI_Allgather(&check, sizeof(StepCheck), MPI_BYTE, all.data(), sizeof(StepCheck),
                           MPI_BYTE, comm_),
-            "MPI_Allgather (J check)");
+            "MPI_Allgather (step checks)");
   std::sort(all.begin(), all.end(),
-            [](const JacobianCheck& a, const JacobianCheck& b) { return a.key < b.key; });
-  JacobianCheck total;
-  for (const auto& o : all)
-    if (o.element >= 0) total.track(o.min_j, o.element, o.key);
+            [](const StepCheck& a, const StepCheck& b) { return a.jacobian.key < b.jacobian.key; });
+  StepCheck total;
+  for (const auto& o : all) {
+    if (o.jacobian.element >= 0)
+      total.jacobian.track(o.jacobian.min_j, o.jacobian.element, o.jacobian.key);
+    total.first_bad = std::min(total.first_bad, o.first_bad);
+  }
   return total;
 }
 
@@ -611,7 +623,8 @@ void PartitionedCpuEngine<T>::single_step() {
   }
 
   // The one-device checks in its order, on the state u(n) (nothing is swapped yet).
-  const JacobianCheck j = jacobian_check();
+  const StepCheck checks = step_check(bad);
+  const JacobianCheck& j = checks.jacobian;
   if (j.element >= 0 && !(j.min_j > 0)) core_.fail_element(step_, Index(j.element), j.min_j);
   if (check_energy) {
     const auto u = whole(u_), up = whole(up_);
@@ -622,10 +635,7 @@ void PartitionedCpuEngine<T>::single_step() {
       core_.fail_blowup(step_, e.kinetic, external_work_, worst, std::sqrt(move) / dt());
     }
   }
-  Index first_bad = bad;
-  check_mpi(MPI_Allreduce(&bad, &first_bad, 1, MPI_INT32_T, MPI_MIN, comm_),
-            "MPI_Allreduce (non-finite)");
-  if (first_bad != INT_MAX) core_.fail_displacement(step_ + 1, first_bad);
+  if (checks.first_bad != INT_MAX) core_.fail_displacement(step_ + 1, Index(checks.first_bad));
   external_work_ += constraint_work(factor);
 
   std::swap(up_, u_);

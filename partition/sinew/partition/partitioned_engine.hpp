@@ -12,11 +12,11 @@
 //  3. the halo nodes' u(n+1) received (MPI_Waitall).
 // Checks and sums that one device makes over all items are made here in the one-device order, so
 // they are the same bits: the smallest J (every step: each rank's primary elements, the ranks'
-// results merged in collection order), the first non-finite node (every step, MPI_MIN), the
-// external work (every rank replays the whole constraint program from the gathered u* of the
-// loaded nodes; the weights' work from every node's terms gathered), and at energy steps the kinetic, strain and hourglass
-// energies (u and u(n−1) gathered whole; chunks of 1024 elements dealt to the ranks, their sums
-// gathered and added in order).
+// results merged in collection order) and the first non-finite node (every step, gathered with
+// the J results); the external work (the loaded nodes' programs replayed on every rank from their
+// gathered u* and u(n−1); the weights' work from every node's terms, gathered); at energy steps
+// the kinetic, strain and hourglass energies (u and u(n−1) gathered whole; the one-device chunks
+// of 1024 elements dealt to the ranks, their sums gathered and added in order).
 //
 // Every Backend method is collective: all ranks call the same methods in the same order, and each
 // gets the whole result (displacements, energies, state, fields). A checkpoint holds the whole
