@@ -6,7 +6,7 @@
 //
 // Every rank runs the runner (run_scene) on the partitioned engine, whose calls are collective;
 // rank 0 writes the outputs, the other ranks write theirs into a temporary folder removed at the
-// end. Exit status as sinew-simulate's (no interruption checkpoints: a signal stops every rank).
+// end (with --restart, a copy of rank 0's: the ranks must share a file system). Exit status as sinew-simulate's (no interruption checkpoints: a signal stops every rank).
 // Any other error on one rank aborts all of them (MPI_Abort) rather than leave the others waiting.
 #include <fmt/format.h>
 #include <mpi.h>
@@ -116,16 +116,24 @@ int main(int argc, char** argv) {
   opt.make_backend = [](const formats::Model& model, const simulator::Setup& setup) {
     return partition::make_partitioned_cpu_backend(model, setup, MPI_COMM_WORLD);
   };
+  const std::string output_dir =
+      !output.empty() ? output : std::filesystem::path(opt.scene_path).stem().string() + "_results";
   const int rc = tool::run("sinew-simulate-parts", [&] {
     std::optional<ScratchFolder> scratch;
     if (rank == 0) {
-      opt.output_dir = !output.empty()
-                           ? output
-                           : std::filesystem::path(opt.scene_path).stem().string() + "_results";
+      opt.output_dir = output_dir;
     } else {
       scratch.emplace(rank);
       opt.output_dir = scratch->path.string();
+      // A resumed run appends to its outputs: these ranks resume on a copy of rank 0's (taken
+      // before rank 0 touches them: the barrier below).
+      const std::filesystem::path from = output_dir;
+      if (!opt.restart.empty() && std::filesystem::is_directory(from))
+        std::filesystem::copy(from, scratch->path,
+                              std::filesystem::copy_options::recursive |
+                                  std::filesystem::copy_options::overwrite_existing);
     }
+    MPI_Barrier(MPI_COMM_WORLD);
     if (rank == 0) log::info("{} parts (MPI ranks)", size);
     return simulate(opt, rank);
   });

@@ -2,7 +2,8 @@
 # partition_simulate_parts): the box compression scene (data/scenes/box_compression.yaml) on 2 and
 # 3 parts gives probe files identical byte for byte (17 significant digits: the same bits) and a
 # completed summary; a bad scene fails on every rank with the error named and a non-zero status;
-# sinew-simulate --explain --parts P prints the partition.
+# a checkpoint of 3 parts resumes on 2 with the same files; sinew-simulate --explain --parts P prints
+# the partition.
 # Inputs: -DSIMULATE=<sinew-simulate> -DPARTS=<sinew-simulate-parts> -DMPIEXEC=<mpirun>
 #         -DGENERATE=<sinew-generate> -DSCENES=<data/scenes> -DWORK=<dir>
 cmake_minimum_required(VERSION 3.20)
@@ -36,6 +37,25 @@ foreach(parts 2 3)
   expect("summary status completed (got ${status})" status STREQUAL completed)
   string(FIND "${device}" "${parts} parts" pos)
   expect("the summary names the parts (got ${device})" pos GREATER -1)
+endforeach()
+
+# A checkpoint written on 3 parts resumes on 2 and ends on the one-device probe files.
+execute_process(COMMAND ${mpirun} -n 3 "${PARTS}" "${WORK}/box_compression.yaml" -o "${WORK}/ckpt"
+                        --quiet --threads 1 --checkpoint-every 400
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+expect("a 3-part run with --checkpoint-every (${err})" rc EQUAL 0)
+expect("it writes checkpoint.h5" EXISTS ${WORK}/ckpt/checkpoint.h5)
+execute_process(COMMAND ${mpirun} -n 2 "${PARTS}" "${WORK}/box_compression.yaml" -o "${WORK}/ckpt"
+                        --quiet --threads 1 --restart "${WORK}/ckpt/checkpoint.h5"
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+expect("--restart on 2 parts resumes (${err})" rc EQUAL 0)
+file(READ "${WORK}/ckpt/run_summary.json" summary)
+string(JSON restart GET "${summary}" restart_step)
+expect("resumed from step 800 (got ${restart})" restart EQUAL 800)
+foreach(probe probe_lid_force.csv probe_bulge.csv)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files "${WORK}/one/${probe}"
+                          "${WORK}/ckpt/${probe}" RESULT_VARIABLE same)
+  expect("${probe} after a 3 → 2 part restart is the one-device file" same EQUAL 0)
 endforeach()
 
 # A scene naming a model that does not exist: an error naming the key, non-zero on every rank.
