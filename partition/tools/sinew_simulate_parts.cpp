@@ -103,8 +103,8 @@ int main(int argc, char** argv) {
     return rc;
   }
 
-  // Rank 0 speaks; the others say only what goes wrong.
-  log::set_level(rank != 0   ? log::Level::warn
+  // Rank 0 speaks; the others say only their errors (warnings are the same on every rank).
+  log::set_level(rank != 0   ? log::Level::error
                  : verbose   ? log::Level::debug
                  : opt.quiet ? log::Level::warn
                              : log::Level::info);
