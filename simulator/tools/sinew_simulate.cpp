@@ -3,7 +3,7 @@
 //
 //   sinew-simulate SCENE [-o OUTDIR] [--explain [--run]] [--device cpu|cuda|auto]
 //                  [--precision float|double] [--threads N] [--quiet] [--restart CKPT]
-//                  [--checkpoint-every N] [--force]
+//                  [--checkpoint-every N] [--force] [--parts P (with --explain)]
 //
 // Exit status: 0 done (or plan printed), 1 bad input or I/O error, 2 bad command line,
 // 3 the simulation became unstable (frames written so far stay valid), 130 interrupted (a
@@ -19,6 +19,7 @@
 #include "sinew/common/log.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
+#include "sinew/partition/partition.hpp"
 #include "sinew/simulator/runner.hpp"
 
 namespace {
@@ -63,6 +64,11 @@ int main(int argc, char** argv) {
   app.add_flag("--explain", opt.explain,
                "Print the plan (stages, element collections, memory, time step) and exit");
   app.add_flag("--run", run_too, "With --explain: run after printing the plan");
+  int parts = 0;
+  app.add_option("--parts", parts,
+                 "With --explain: also print the partition into P slabs for P ranks or GPUs "
+                 "(docs/multi-gpu.md)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--device", opt.device,
                  "Backend: cpu, cuda or auto (cuda when a CUDA device is available, else cpu)")
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
@@ -96,6 +102,18 @@ int main(int argc, char** argv) {
         precision == "float" ? simulator::Precision::float32 : simulator::Precision::float64;
   }
   opt.run = !opt.explain || run_too;
+  if (parts > 0) {
+    if (!opt.explain) {
+      tool::report_error("sinew-simulate",
+                         "--parts needs --explain (runs on several parts use "
+                         "sinew-simulate-parts under mpirun)");
+      return 2;
+    }
+    opt.explain_more = [parts](const formats::Model& model, const simulator::Plan& plan) {
+      const auto p = partition::make_partition(model, partition::work_of(model, plan), parts);
+      return p.explain(plan.precision == simulator::Precision::float32 ? 4 : 8);
+    };
+  }
   opt.output_dir =
       !output.empty() ? output : std::filesystem::path(opt.scene_path).stem().string() + "_results";
   simulator::install_interrupt_handlers();

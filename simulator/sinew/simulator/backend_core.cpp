@@ -152,6 +152,64 @@ NodeData<T> EngineArrays<T>::node_data(const physics::CentralDifference<T>& cd) 
 }
 
 template <typename T>
+HostSlidingState<T>::HostSlidingState(const EngineArrays<T>& a)
+    : triangle(a.slide_triangle),
+      search_triangle(a.slide_triangle),
+      list_count(a.slide_node.size(), -1),
+      list(a.slide_node.size() * kCandidates),
+      list_distance(a.slide_node.size() * kCandidates),
+      anchor(a.slide_node.size()) {
+  for (const auto& s : a.surfaces)
+    surfaces.push_back({s.view(), s.triangle_corners.data(), s.skin});
+}
+
+template <typename T>
+void HostSlidingState<T>::restore(const std::vector<Index>& triangles) {
+  triangle = triangles;
+  search_triangle = triangles;
+  std::fill(list_count.begin(), list_count.end(), -1);
+}
+
+template <typename T>
+SlideData<T> HostSlidingState<T>::data(const EngineArrays<T>& a) {
+  return {a.slide_node.data(),
+          a.slide_surface.data(),
+          a.slide_distance.data(),
+          triangle.data(),
+          search_triangle.data(),
+          list_count.data(),
+          anchor.data(),
+          list.data(),
+          list_distance.data(),
+          surfaces.data(),
+          std::int32_t(a.slide_node.size()),
+          nullptr};
+}
+
+template <typename T>
+ConstraintData<T> host_constraint_data(const EngineArrays<T>& a,
+                                       const physics::CentralDifference<T>& cd,
+                                       Vec3<T>* prescribed_free, HostSlidingState<T>& sliding) {
+  const ConstraintArrays<T>& c = a.constraints;
+  return {c.node.data(),
+          c.offset.data(),
+          c.op.data(),
+          std::int32_t(c.node.size()),
+          a.inverse_mass.data(),
+          cd,
+          c.force_per_node.data(),
+          c.prescribed_set.data(),
+          c.prescribed_value.data(),
+          c.prescribed_mask.data(),
+          prescribed_free,
+          c.plane_normal.data(),
+          sliding.data(a),
+          a.rest.data(),
+          a.gravity.empty() ? nullptr : a.gravity.data(),
+          std::int32_t(c.force_per_node.size())};
+}
+
+template <typename T>
 EngineArrays<T> make_engine_arrays(const PreparedModel& p, double sliding_skin) {
   if (!(sliding_skin > 0) || !std::isfinite(sliding_skin))
     throw ConfigError("", "sliding_skin",
@@ -544,6 +602,10 @@ ElementFields BackendCore::fields_at(const EngineArrays<T>& a, const Vec3<T>* u,
                                             double) const;                                       \
   template struct EngineArrays<T>;                                                               \
   template EngineArrays<T> make_engine_arrays<T>(const PreparedModel&, double);                  \
+  template struct HostSlidingState<T>;                                                           \
+  template ConstraintData<T> host_constraint_data<T>(const EngineArrays<T>&,                     \
+                                                     const physics::CentralDifference<T>&,       \
+                                                     Vec3<T>*, HostSlidingState<T>&);            \
   template void BackendCore::step_scalars<T>(std::int64_t, T*) const;                            \
   template void BackendCore::activations<T>(double, T*) const;                                   \
   template double BackendCore::kinetic_energy<T>(const Vec3<T>*, const Vec3<T>*, const T*, int)  \

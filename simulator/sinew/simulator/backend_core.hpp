@@ -92,6 +92,30 @@ struct EngineArrays {
 template <typename T>
 EngineArrays<T> make_engine_arrays(const PreparedModel& p, double sliding_skin);
 
+// The sliding state of a run in host memory (the CPU engines): per binding its closest triangle, the
+// warm start of its grid searches, its candidate list and the list's anchor (passes/
+// sliding_lists.hpp), refreshed inline as the node moves; and the surfaces' query views.
+template <typename T>
+struct HostSlidingState {
+  std::vector<SlideSurface<T>> surfaces;
+  std::vector<std::int32_t> triangle, search_triangle, list_count, list;
+  std::vector<T> list_distance;
+  std::vector<Vec3<T>> anchor;
+
+  HostSlidingState() = default;
+  explicit HostSlidingState(const EngineArrays<T>& a);  // the triangles at rest, no lists
+  // Continues from these closest triangles; the lists are a cache: the grid search gives the same.
+  void restore(const std::vector<Index>& triangles);
+  SlideData<T> data(const EngineArrays<T>& a);
+};
+
+// The constraint program's view over host arrays (the CPU engines): the tables of `a`, the engine's
+// prescribed captures (per prescribed entry) and its sliding state.
+template <typename T>
+ConstraintData<T> host_constraint_data(const EngineArrays<T>& a,
+                                       const physics::CentralDifference<T>& cd,
+                                       Vec3<T>* prescribed_free, HostSlidingState<T>& sliding);
+
 // N × 3 doubles, node-major, of n vectors in T (the Backend interface's layout), and back with T(x).
 template <typename T>
 std::vector<double> flatten(const Vec3<T>* v, std::size_t n);

@@ -104,9 +104,10 @@ class CpuEngine final : public Backend {
   // (step_scalars); `loads` off: the initial constraints (no forces, captures or work). Returns
   // the work of the loads and constraint forces over the step.
   double apply_constraints(std::vector<Vec3<T>>& u, std::int64_t step, bool loads);
-  ConstraintData<T> constraint_data();
+  ConstraintData<T> constraint_data() {
+    return host_constraint_data(a_, cd_, prescribed_free_.data(), sliding_);
+  }
   void single_step();
-  void forget_slide_lists() { std::fill(list_count_.begin(), list_count_.end(), -1); }
 
   BackendCore core_;
   EngineArrays<T> a_;
@@ -116,12 +117,7 @@ class CpuEngine final : public Backend {
   std::vector<T> activation_, scalars_;
   std::vector<Vec3<T>> elem_force_, f_;   // E × 8 (element-major: e · 8 + corner), N
   std::vector<Vec3<T>> prescribed_free_;  // per prescribed entry: u* before constraints
-  // Sliding: per binding its closest triangle, the warm start of its grid searches and its
-  // candidate list (passes/sliding_lists.hpp), refreshed inline as the node moves.
-  std::vector<SlideSurface<T>> slide_surfaces_;
-  std::vector<std::int32_t> slide_triangle_, search_triangle_, list_count_, list_;
-  std::vector<T> list_distance_;
-  std::vector<Vec3<T>> anchor_;
+  HostSlidingState<T> sliding_;
   // dynamic state
   std::vector<Vec3<T>> u_, up_, un_;
   std::int64_t step_ = 0;
@@ -143,15 +139,7 @@ CpuEngine<T>::CpuEngine(const formats::Model& model, const Setup& setup, Plan pl
   activation_.assign(core_.muscle_count(), T(0));
   scalars_.assign(core_.step_scalar_count(), T(0));
   prescribed_free_.resize(a_.constraints.prescribed_set.size());
-  for (const auto& s : a_.surfaces)
-    slide_surfaces_.push_back({s.view(), s.triangle_corners.data(), s.skin});
-  const std::size_t slides = a_.slide_node.size();
-  slide_triangle_ = a_.slide_triangle;
-  search_triangle_ = a_.slide_triangle;
-  list_count_.assign(slides, -1);
-  list_.resize(slides * kCandidates);
-  list_distance_.resize(slides * kCandidates);
-  anchor_.resize(slides);
+  sliding_ = HostSlidingState<T>(a_);
 
   // Initial state: u(0) = 0 with the constraints at t = 0; u(−1) = u(0) − v0 Δt.
   u_.assign(n_, Vec3<T>{T(0), T(0), T(0)});
@@ -228,39 +216,6 @@ bool CpuEngine<T>::update_nodes() {
     bad[c] = b;
   });
   return std::find(bad.begin(), bad.end(), 1) != bad.end();
-}
-
-template <typename T>
-ConstraintData<T> CpuEngine<T>::constraint_data() {
-  const ConstraintArrays<T>& c = a_.constraints;
-  const SlideData<T> slide{a_.slide_node.data(),
-                           a_.slide_surface.data(),
-                           a_.slide_distance.data(),
-                           slide_triangle_.data(),
-                           search_triangle_.data(),
-                           list_count_.data(),
-                           anchor_.data(),
-                           list_.data(),
-                           list_distance_.data(),
-                           slide_surfaces_.data(),
-                           std::int32_t(a_.slide_node.size()),
-                           nullptr};
-  return {c.node.data(),
-          c.offset.data(),
-          c.op.data(),
-          std::int32_t(c.node.size()),
-          a_.inverse_mass.data(),
-          cd_,
-          c.force_per_node.data(),
-          c.prescribed_set.data(),
-          c.prescribed_value.data(),
-          c.prescribed_mask.data(),
-          prescribed_free_.data(),
-          c.plane_normal.data(),
-          slide,
-          a_.rest.data(),
-          a_.gravity.empty() ? nullptr : a_.gravity.data(),
-          std::int32_t(c.force_per_node.size())};
 }
 
 template <typename T>
@@ -345,7 +300,7 @@ Energies CpuEngine<T>::energies() {
 
 template <typename T>
 State CpuEngine<T>::state() const {
-  return core_.make_state(step_, u_, up_, slide_triangle_, external_work_);
+  return core_.make_state(step_, u_, up_, sliding_.triangle, external_work_);
 }
 
 template <typename T>
@@ -353,9 +308,7 @@ void CpuEngine<T>::restore(const State& s) {
   core_.check_state(s);
   u_ = unflatten<T>(s.u);
   up_ = unflatten<T>(s.u_prev);
-  slide_triangle_ = s.sliding_triangle;
-  search_triangle_ = s.sliding_triangle;
-  forget_slide_lists();  // lists are a cache: the grid search gives the same triangles
+  sliding_.restore(s.sliding_triangle);
   step_ = s.step;
   external_work_ = s.external_work;
   core_.set_energy_reference(s.energy_reference);

@@ -191,7 +191,10 @@ RunResult run_scene(const RunOptions& options) {
   try {
     CudaOptions cuda_options;
     cuda_options.device = options.cuda_device;
-    backend = cuda ? make_cuda_backend(model, setup, cuda_options) : make_cpu_backend(model, setup);
+    if (options.make_backend) cuda = false;  // the caller's engine, on the host
+    backend = options.make_backend ? options.make_backend(model, setup)
+              : cuda               ? make_cuda_backend(model, setup, cuda_options)
+                                   : make_cpu_backend(model, setup);
   } catch (const ConfigError& e) {
     // The engine names Setup fields; point at the scene key the user wrote instead.
     if (!e.file().empty()) throw;
@@ -265,6 +268,7 @@ RunResult run_scene(const RunOptions& options) {
                  f == OutputField::energy_density;
         });
     text += describe(estimate_run(*backend, resolved, counts, element_fields));
+    if (options.explain_more) text += options.explain_more(model, plan);
     print(text);
   }
   if (!options.run) return result;

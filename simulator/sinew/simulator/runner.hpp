@@ -10,9 +10,13 @@
 // or after it), and the last step; probes likewise at their interval (default every step).
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
+#include "sinew/formats/model.hpp"
+#include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/plan.hpp"
 #include "sinew/simulator/run_summary.hpp"
 #include "sinew/simulator/scene.hpp"
 
@@ -36,6 +40,12 @@ struct RunOptions {
   std::int64_t stop_at_step = -1;
   // Receives the plan text (default: stdout).
   std::function<void(const std::string&)> print;
+  // With `explain`: more text appended to the plan from the model and plan (sinew-simulate --parts
+  // prints the partition of sinew::partition this way; the simulator does not depend on it).
+  std::function<std::string(const formats::Model&, const Plan&)> explain_more;
+  // The engine to run instead of --device's (sinew-simulate-parts: the partitioned engine under
+  // mpirun, whose every call is collective); null: make_cpu_backend or make_cuda_backend.
+  std::function<std::unique_ptr<Backend>(const formats::Model&, const Setup&)> make_backend;
 };
 
 struct RunResult {
