@@ -102,6 +102,12 @@ PreparedModel prepare_model(const formats::Model& model, const Setup& setup, con
       s.curve = f.curve;
       p.forces.push_back(std::move(s));
     }
+    // Live force slots: empty and off (curve 0) until BackendCore::set_force_slot.
+    for (int k = 0; k < setup.force_slots; ++k) {
+      PreparedLoadSet s;
+      s.curve = Curve::constant(0.0);
+      p.forces.push_back(std::move(s));
+    }
     for (const auto& pd : setup.prescribed) {
       PreparedLoadSet s;
       s.nodes = pd.nodes;

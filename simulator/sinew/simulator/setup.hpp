@@ -113,6 +113,10 @@ struct Setup {
   // Used when effects.loads.
   std::vector<PrescribedDisplacement> prescribed;
   std::vector<NodalForce> forces;
+  // Steerable force slots of a live run (sinew-live, docs/live.md), used when effects.loads: each
+  // is a force set after `forces` whose nodes and per-node force are set between steps
+  // (Backend::set_force_slot); it starts empty and off. 0 in every batch run.
+  int force_slots = 0;
   // Always honoured.
   std::vector<SlidingPlane> sliding_planes;
   std::vector<InitialVelocity> initial_velocities;
