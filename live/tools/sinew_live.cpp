@@ -77,11 +77,8 @@ int main(int argc, char** argv) {
       throw IoError(web, "", "the page's folder has no index.html (--web)");
     if (!std::filesystem::is_regular_file(std::filesystem::path(three) / "build/three.module.js"))
       throw IoError(three, "", "three.js is not installed there: run scripts/install-deps (--three)");
-    // The live run plans as sinew-simulate does, plus one steerable force slot for drags when the
-    // scene simulates loads (an empty force set: nothing else changes).
-    auto run = simulator::load_run(opt, [](simulator::Setup& s) {
-      if (s.effects.loads) s.force_slots = 1;
-    });
+    // The live run plans as sinew-simulate does, with its steering (make_live_setup).
+    auto run = simulator::load_run(opt, live::make_live_setup);
     if (opt.explain) std::fputs(simulator::explain_run(run, "(live)").c_str(), stdout);
     if (!live::is_loopback_host(server.host) && server.token.empty())
       server.token = live::make_token();

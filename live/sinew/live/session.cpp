@@ -65,6 +65,11 @@ double seconds_since(Clock::time_point t) {
 
 }  // namespace
 
+void make_live_setup(simulator::Setup& setup) {
+  setup.activation_overrides = setup.effects.muscles;
+  setup.force_slots = setup.effects.loads ? 1 : 0;
+}
+
 Session::Session(simulator::LoadedRun run, SessionOptions options)
     : run_(std::move(run)), options_(std::move(options)) {
   surface_ = make_surface_view(run_.model, options_.surface);

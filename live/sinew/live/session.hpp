@@ -32,6 +32,11 @@ class ResultsWriter;
 
 namespace sinew::live {
 
+// What a live run plans beyond the scene (BackendCore steering): activation overrides when it
+// simulates muscles (its Δt then assumes activation 1) and one force slot for drags when it
+// simulates loads. Pass to simulator::load_run.
+void make_live_setup(simulator::Setup& setup);
+
 struct SessionOptions {
   double frame_rate = 30;         // frames per second streamed (at most)
   double chunk_seconds = 0.004;   // wall time per chunk of steps (command latency)

@@ -162,6 +162,11 @@ std::string reproduce_scene(const simulator::Scene& scene, const std::string& sc
   json j = to_json(parse_yaml(scene_text, scene.file));
   j["model"] = std::filesystem::absolute(scene.model_path).lexically_normal().string();
   j["duration"] = knot_time(end_step, dt, s);
+  // The live run's Δt (planned for activations up to 1, Setup::activation_overrides), fixed.
+  json ts = {{"mode", "fixed"}, {"value", dt}};
+  if (scene.time_step.safety_factor) ts["safety_factor"] = *scene.time_step.safety_factor;
+  if (scene.time_step.force) ts["force"] = true;
+  j["time_step"] = ts;
   j["title"] = fmt::format("{} (reproduced live session, {} steps)",
                            scene.title.empty() ? scene.file : scene.title, end_step);
   for (std::size_t m = 0; m < muscle_names.size(); ++m) {

@@ -52,8 +52,9 @@ std::vector<std::array<double, 2>> reproduce_activation(const simulator::Curve& 
                                                         std::int64_t end_step);
 
 // The scene (JSON, which the YAML scene reader reads) that reproduces the session up to end_step:
-// the original scene's keys with `model` made absolute, `duration` = end_step · Δt / s, the
-// steered muscles' curves and the drags' node sets and force conditions added.
+// the original scene's keys with `model` made absolute, `duration` = end_step · Δt / s, the live
+// run's Δt as a fixed time step, the steered muscles' curves and the drags' node sets and force
+// conditions added.
 std::string reproduce_scene(const simulator::Scene& scene, const std::string& scene_text,
                             const std::vector<simulator::Curve>& activation_curves,
                             const std::vector<std::string>& muscle_names, double dt, double s,

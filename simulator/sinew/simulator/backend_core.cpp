@@ -249,6 +249,9 @@ void BackendCore::activations(double t, T* out) const {
 }
 
 void BackendCore::set_activation_override(std::size_t m, std::optional<double> a) {
+  if (!setup_.activation_overrides)
+    throw ConfigError("", "activation",
+                      "this run was not planned for activation overrides (a live run is)");
   if (m >= muscle_count())
     throw ConfigError("", "activation", fmt::format("muscle {} out of range (the run simulates {})",
                                                     m, muscle_count()));
