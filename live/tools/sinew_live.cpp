@@ -3,7 +3,7 @@
 // docs/live.md.
 //
 //   sinew-live SCENE [--device auto|cpu|cuda] [--port P] [--host H] [--record DIR] [--explain]
-//              [--precision float|double] [--threads N] [--paused] [--frame-rate F]
+//              [--precision float|double] [--threads N] [--paused] [--frame-rate F] [--speed S]
 //              [--surface NAME] [--token T] [--web DIR] [--three DIR] [-q] [-v]
 //
 // Exit status: 0 stopped (Ctrl-C), 1 bad input or I/O error, 2 bad command line.
@@ -54,6 +54,10 @@ int main(int argc, char** argv) {
   app.add_option("--frame-rate", so.frame_rate, "Frames per second streamed (at most)")
       ->default_val(30)
       ->check(CLI::Range(1.0, 240.0));
+  app.add_option("--speed", so.max_speed,
+                 "At most this many simulated seconds per wall second (0: as fast as it goes)")
+      ->default_val(0)
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--surface", so.surface, "Visual surface to show (default: the first)");
   app.add_option("--web", web, "Folder of the page")->default_val(web);
   app.add_option("--three", three, "three.js package folder (scripts/install-deps puts it there)")

@@ -241,4 +241,11 @@ window.addEventListener('pointerup', () => {
   controls.enabled = true;
 });
 
+// Where a point (m) appears on the page, in client pixels (the headless-browser test drags there).
+live.screenOf = (x, y, z) => {
+  const v = new THREE.Vector3(x, y, z).project(camera), r = renderer.domElement.getBoundingClientRect();
+  return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
+};
+live.rest = () => rest;
+
 renderer.setAnimationLoop(() => { controls.update(); renderer.render(scene, camera); });

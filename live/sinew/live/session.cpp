@@ -236,18 +236,19 @@ void Session::apply(const Command& c) {
         throw ProtocolError(fmt::format("no node within {:.4g} m of the picked point", c.radius));
       // While a drag is held its nodes stay those picked first; only the force follows the mouse.
       if (dragging_) nodes = log_.drags.back().nodes;
+      // Per node total · (1 / n): exactly how prepare_model spreads the reproducing scene's force.
       const double k = 1.0 / double(nodes.size());
       const std::array<double, 3> per_node{c.force[0] * k, c.force[1] * k, c.force[2] * k};
       if (dragging_) {
-        if (log_.drags.back().per_node == per_node) break;
+        if (log_.drags.back().total == c.force) break;
         if (log_.drags.back().start == n) {
-          log_.drags.back().per_node = per_node;  // not stepped yet: replace
+          log_.drags.back().total = c.force;  // not stepped yet: replace
         } else {
           log_.drags.back().end = n;
-          log_.drags.push_back({n, -1, nodes, per_node});
+          log_.drags.push_back({n, -1, nodes, c.force});
         }
       } else {
-        log_.drags.push_back({n, -1, nodes, per_node});
+        log_.drags.push_back({n, -1, nodes, c.force});
         log_.events.emplace_back(n, fmt::format("drag on {} nodes", nodes.size()));
       }
       backend.set_force_slot(0, nodes, per_node);
@@ -409,6 +410,10 @@ void Session::loop() {
   const double frame_period = 1.0 / std::max(1.0, options_.frame_rate);
   auto last_frame = Clock::now() - std::chrono::seconds(1), last_status = last_frame;
   auto rate_start = Clock::now();
+  // Pacing (max_speed): simulated time since pace_step may run at most max_speed × the wall time
+  // since pace_wall; restarted whenever the engine was not running.
+  auto pace_wall = Clock::now();
+  std::int64_t pace_step = backend.step_index();
   std::int64_t rate_steps = 0;
   double rate_wall = 0;
   chunk_ = 1;
@@ -449,6 +454,10 @@ void Session::loop() {
       changed_ = true;
     }
     const bool run = !paused_ || pending_steps_ > 0;
+    if (!run || pending_steps_ > 0) {
+      pace_wall = Clock::now();
+      pace_step = backend.step_index();
+    }
     if (run) {
       std::int64_t k = chunk_;
       if (pending_steps_ > 0) k = std::min(k, pending_steps_);
@@ -496,6 +505,16 @@ void Session::loop() {
       last_status = Clock::now();
     }
     changed_ = false;
+    if (run && options_.max_speed > 0) {
+      const double ahead = double(backend.step_index() - pace_step) * backend.dt() /
+                               run_.resolved.setup.time_scaling / options_.max_speed -
+                           seconds_since(pace_wall);
+      if (ahead > 0) {
+        std::unique_lock lock(mutex_);
+        wake_.wait_for(lock, std::chrono::duration<double>(std::min(ahead, frame_period)),
+                       [&] { return !queue_.empty() || stop_.load(); });
+      }
+    }
     if (!run) {
       std::unique_lock lock(mutex_);
       wake_.wait_for(lock, std::chrono::duration<double>(frame_period),

@@ -40,6 +40,7 @@ void make_live_setup(simulator::Setup& setup);
 struct SessionOptions {
   double frame_rate = 30;         // frames per second streamed (at most)
   double chunk_seconds = 0.004;   // wall time per chunk of steps (command latency)
+  double max_speed = 0;           // simulated s per wall s at most (0: as fast as it goes)
   std::string record_dir;         // record from the start into this folder ("" none)
   bool start_paused = false;
   std::string surface;            // visual surface to stream ("" the first visual one)

@@ -193,11 +193,9 @@ std::string reproduce_scene(const simulator::Scene& scene, const std::string& sc
       if (g.end - 1 > g.start) curve.push_back({knot_time(g.end - 1, dt, s), 1.0});
       curve.push_back({knot_time(g.end, dt, s), 0.0});
     }
-    j["boundary_conditions"].push_back({{"type", "force"},
-                                        {"set", set},
-                                        {"value", g.per_node},
-                                        {"per_node", true},
-                                        {"curve", curve}});
+    // The total, spread as the live slot spread it (prepare_model: total · (1 / n) per node).
+    j["boundary_conditions"].push_back(
+        {{"type", "force"}, {"set", set}, {"value", g.total}, {"curve", curve}});
   }
   return j.dump(1) + "\n";
 }
@@ -219,7 +217,7 @@ std::string steering_log_json(const SteeringLog& log, double dt, double s,
     drags.push_back({{"start_step", g.start},
                      {"end_step", g.end},
                      {"nodes", g.nodes.size()},
-                     {"force_per_node", g.per_node}});
+                     {"force", g.total}});
   j["drags"] = drags;
   return j.dump(1) + "\n";
 }

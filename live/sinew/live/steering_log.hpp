@@ -1,7 +1,7 @@
 #pragma once
 // The steering of a live session since its last reset, step by step, and the scene that
 // reproduces it (docs/live.md, "Record and reproduce"): slider moves become piecewise-linear
-// activation curves, drags become per-node force conditions on node sets, and sinew-simulate on
+// activation curves, drags become force conditions on node sets, and sinew-simulate on
 // that scene (same backend and precision) computes the same bits.
 //
 // Exactness. An override applied before step n is the activation of steps ≥ n, as a knot at
@@ -33,7 +33,8 @@ struct ActivationChange {
 struct DragSpan {
   std::int64_t start = 0, end = -1;  // steps [start, end); end −1: still held
   std::vector<formats::Index> nodes;
-  std::array<double, 3> per_node{};  // N
+  std::array<double, 3> total{};  // N, spread evenly: each node gets total · (1 / nodes), as a
+                                 // scene's force condition without per_node spreads its value
 };
 
 struct SteeringLog {
