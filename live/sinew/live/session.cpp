@@ -447,7 +447,7 @@ void Session::loop() {
       writer_.reset();
     }
     const std::int64_t n = backend.step_index();
-    if (!at_end_ && n >= run_.backend->plan().steps && n > 0 && !paused_ && pending_steps_ == 0) {
+    if (options_.pause_at_end && !at_end_ && n >= run_.backend->plan().steps && n > 0 && !paused_ && pending_steps_ == 0) {
       // The scene's duration is reached: pause once; resume runs on past it.
       at_end_ = true;
       paused_ = true;

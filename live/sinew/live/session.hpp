@@ -43,6 +43,7 @@ struct SessionOptions {
   double max_speed = 0;           // simulated s per wall s at most (0: as fast as it goes)
   std::string record_dir;         // record from the start into this folder ("" none)
   bool start_paused = false;
+  bool pause_at_end = true;       // pause once when the scene's duration is reached
   std::string surface;            // visual surface to stream ("" the first visual one)
   double drag_radius_default = 0; // m (0: 3 voxels)
 };
