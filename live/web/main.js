@@ -3,7 +3,9 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 const $ = (id) => document.getElementById(id);
-const token = new URLSearchParams(location.search).get('token');
+const params = new URLSearchParams(location.search);
+const token = params.get('token');
+const upAxis = params.get('up') === 'y' ? 'y' : 'z';  // ?up=y for models modelled y-up (the face)
 const ws = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws` +
                          (token ? `?token=${encodeURIComponent(token)}` : ''));
 ws.binaryType = 'arraybuffer';
@@ -84,8 +86,10 @@ function buildMesh(buf) {
   controls.target.copy(s.center);
   camera.near = s.radius / 100;
   camera.far = s.radius * 100;
-  camera.position.copy(s.center).add(new THREE.Vector3(0.6, -1.6, 1.0).multiplyScalar(s.radius * 1.6));
-  camera.up.set(0, 0, 1);
+  // Three-quarter view from the front: −y with z up, +z with y up.
+  const eye = upAxis === 'y' ? new THREE.Vector3(0.6, 0.5, 1.6) : new THREE.Vector3(0.6, -1.6, 1.0);
+  camera.position.copy(s.center).add(eye.multiplyScalar(s.radius * 1.6));
+  camera.up.set(0, upAxis === 'y' ? 1 : 0, upAxis === 'y' ? 0 : 1);
   camera.updateProjectionMatrix();
   controls.update();
 }
