@@ -10,8 +10,8 @@
 //
 //   live_bench SCENE [--device cpu|cuda|auto] [--precision float|double] [--seconds S]
 //              [--frame-rate F] [--threads N]
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -144,9 +144,9 @@ int main(int argc, char** argv) {
           sent.push_back(Clock::now());
         }
         ws.text(true);
-        ws.write(net::buffer(fmt::format(
-            R"({{"type": "activation", "muscle": "{}", "value": {}, "id": {}}})", muscle,
-            id % 2 ? 0.35 : 0.3, id)));
+        ws.write(net::buffer(
+            fmt::format(R"({{"type": "activation", "muscle": "{}", "value": {}, "id": {}}})",
+                        muscle, id % 2 ? 0.35 : 0.3, id)));
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
@@ -166,8 +166,9 @@ int main(int argc, char** argv) {
         "({} frame bytes), live/batch {:.3f}\n",
         live_sps, live_sps * dt / s, fps, live::kFrameHeaderBytes + 16 * std::size_t(vertices),
         live_sps / batch_sps);
-    fmt::print("slider -> first frame reflecting it: median {:.1f} ms, p99 {:.1f} ms ({} samples)\n",
-               1e3 * percentile(latency, 0.5), 1e3 * percentile(latency, 0.99), latency.size());
+    fmt::print(
+        "slider -> first frame reflecting it: median {:.1f} ms, p99 {:.1f} ms ({} samples)\n",
+        1e3 * percentile(latency, 0.5), 1e3 * percentile(latency, 0.99), latency.size());
     return tool::kExitOk;
   });
 }

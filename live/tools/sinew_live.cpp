@@ -80,7 +80,8 @@ int main(int argc, char** argv) {
     if (!std::filesystem::is_regular_file(std::filesystem::path(web) / "index.html"))
       throw IoError(web, "", "the page's folder has no index.html (--web)");
     if (!std::filesystem::is_regular_file(std::filesystem::path(three) / "build/three.module.js"))
-      throw IoError(three, "", "three.js is not installed there: run scripts/install-deps (--three)");
+      throw IoError(three, "",
+                    "three.js is not installed there: run scripts/install-deps (--three)");
     // The live run plans as sinew-simulate does, with its steering (make_live_setup).
     auto run = simulator::load_run(opt, live::make_live_setup);
     if (opt.explain) std::fputs(simulator::explain_run(run, "(live)").c_str(), stdout);
@@ -89,12 +90,10 @@ int main(int argc, char** argv) {
     server.roots = {{"/vendor/three/", three}, {"/", web}};
     live::Session session(std::move(run), so);
     live::Server http(session, server);
-    const std::string shown = server.host.find(':') != std::string::npos
-                                  ? "[" + server.host + "]"
-                                  : server.host;
-    const std::string url =
-        fmt::format("http://{}:{}/{}", shown, http.port(),
-                    server.token.empty() ? "" : "?token=" + server.token);
+    const std::string shown =
+        server.host.find(':') != std::string::npos ? "[" + server.host + "]" : server.host;
+    const std::string url = fmt::format("http://{}:{}/{}", shown, http.port(),
+                                        server.token.empty() ? "" : "?token=" + server.token);
     std::printf("sinew-live: open %s  (Ctrl-C stops)\n", url.c_str());
     std::fflush(stdout);
     session.start();

@@ -31,7 +31,8 @@ TEST(LiveProtocol, ParsesEveryMessageType) {
   c = parse_command(R"({"type": "activation", "muscle": "flexor", "value": null})");
   EXPECT_FALSE(c.value.has_value());
   EXPECT_EQ(parse_command(R"({"type": "step", "count": 12})").count, 12);
-  c = parse_command(R"({"type": "drag", "point": [0, 0.001, 2], "force": [0, 0, -0.5], "radius": 0.003})");
+  c = parse_command(
+      R"({"type": "drag", "point": [0, 0.001, 2], "force": [0, 0, -0.5], "radius": 0.003})");
   EXPECT_EQ(c.kind, Command::Kind::drag);
   EXPECT_EQ(c.force[2], -0.5);
   EXPECT_EQ(parse_command(R"({"type": "field", "field": "jacobian"})").field, Field::jacobian);
@@ -46,19 +47,26 @@ TEST(LiveProtocol, RefusesBadMessagesWithAReason) {
   EXPECT_EQ(refusal(R"({"kind": "pause"})"), "missing 'type' (a string)");
   EXPECT_NE(refusal(R"({"type": "explode"})").find("unknown message type 'explode'"),
             std::string::npos);
-  EXPECT_NE(refusal(R"({"type": "activation", "muscle": "m", "value": 1.5})").find("outside [0, 1]"),
-            std::string::npos);
+  EXPECT_NE(
+      refusal(R"({"type": "activation", "muscle": "m", "value": 1.5})").find("outside [0, 1]"),
+      std::string::npos);
   EXPECT_NE(refusal(R"({"type": "activation", "muscle": "m", "value": -0.1})").find("outside"),
             std::string::npos);
   // JSON has no NaN; an overflowing literal reads as infinity and is refused as not finite.
   EXPECT_EQ(refusal(R"({"type": "activation", "muscle": "m", "value": NaN})"), "malformed JSON");
   EXPECT_FALSE(refusal(R"({"type": "activation", "muscle": "m", "value": 1e999})").empty());
-  EXPECT_FALSE(refusal(R"({"type": "drag", "point": [0, 0, 1e999], "force": [0, 0, 0], "radius": 0.01})").empty());
-  EXPECT_NE(refusal(R"({"type": "drag", "point": [0, 0, 0], "force": [0, 0, 1000], "radius": 0.01})").find("above the limit"),
+  EXPECT_FALSE(
+      refusal(R"({"type": "drag", "point": [0, 0, 1e999], "force": [0, 0, 0], "radius": 0.01})")
+          .empty());
+  EXPECT_NE(
+      refusal(R"({"type": "drag", "point": [0, 0, 0], "force": [0, 0, 1000], "radius": 0.01})")
+          .find("above the limit"),
+      std::string::npos);
+  EXPECT_NE(refusal(R"({"type": "drag", "point": [0, 0], "force": [0, 0, 0], "radius": 0.01})")
+                .find("3 numbers"),
             std::string::npos);
-  EXPECT_NE(refusal(R"({"type": "drag", "point": [0, 0], "force": [0, 0, 0], "radius": 0.01})").find("3 numbers"),
-            std::string::npos);
-  EXPECT_NE(refusal(R"({"type": "drag", "point": [0, 0, 0], "force": [0, 0, 0], "radius": -1})").find("radius"),
+  EXPECT_NE(refusal(R"({"type": "drag", "point": [0, 0, 0], "force": [0, 0, 0], "radius": -1})")
+                .find("radius"),
             std::string::npos);
   EXPECT_NE(refusal(R"({"type": "step", "count": 0})").find("count"), std::string::npos);
   EXPECT_NE(refusal(R"({"type": "step", "count": 1.5})").find("count"), std::string::npos);
@@ -103,11 +111,11 @@ TEST(LiveReproduce, ActivationCurveGivesEveryStepsValueExactly) {
   // Ramp 0 → 0.3 over 0.05 s, hold, release from 0.4 s to 0.45 s (three sloped segments).
   const simulator::Curve scene{{{0.0, 0.0}, {0.05, 0.3}, {0.4, 0.3}, {0.45, 0.0}}};
   const std::vector<std::vector<ActivationChange>> cases = {
-      {{100, 0, 0.8}},                             // inside the hold, never back
-      {{100, 0, 0.8}, {150, 0, std::nullopt}},     // back to the curve in the hold
-      {{50, 0, 0.7}, {120, 0, std::nullopt}},      // from the ramp, back in the hold
-      {{10, 0, 0.7}, {30, 0, std::nullopt}},       // both inside the ramp
-      {{0, 0, 1.0}, {1900, 0, std::nullopt}},      // from step 0, back during the release
+      {{100, 0, 0.8}},                          // inside the hold, never back
+      {{100, 0, 0.8}, {150, 0, std::nullopt}},  // back to the curve in the hold
+      {{50, 0, 0.7}, {120, 0, std::nullopt}},   // from the ramp, back in the hold
+      {{10, 0, 0.7}, {30, 0, std::nullopt}},    // both inside the ramp
+      {{0, 0, 1.0}, {1900, 0, std::nullopt}},   // from step 0, back during the release
       {{1500, 0, 0.1}, {1500, 0, 0.2}, {1800, 0, 0.9}, {1850, 0, std::nullopt}},
   };
   const std::int64_t end = 2100;

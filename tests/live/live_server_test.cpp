@@ -179,12 +179,15 @@ TEST_F(LiveServer, BadMessagesGetClearErrors) {
             std::string::npos);
   EXPECT_EQ(c.error_for(R"({"type": "activation", "muscle": "flexor", "value": NaN})"),
             "malformed JSON");
-  EXPECT_FALSE(c.error_for(R"({"type": "activation", "muscle": "flexor", "value": 1e999})").empty());
-  EXPECT_NE(c.error_for(R"({"type": "activation", "muscle": "flexor", "value": 7})").find("outside"),
-            std::string::npos);
-  EXPECT_NE(c.error_for(R"({"type": "drag", "point": [9, 9, 9], "force": [0, 0, 1], "radius": 0.001})")
-                .find("no node within"),
-            std::string::npos);
+  EXPECT_FALSE(
+      c.error_for(R"({"type": "activation", "muscle": "flexor", "value": 1e999})").empty());
+  EXPECT_NE(
+      c.error_for(R"({"type": "activation", "muscle": "flexor", "value": 7})").find("outside"),
+      std::string::npos);
+  EXPECT_NE(
+      c.error_for(R"({"type": "drag", "point": [9, 9, 9], "force": [0, 0, 1], "radius": 0.001})")
+          .find("no node within"),
+      std::string::npos);
   c.ws.binary(true);
   c.ws.write(net::buffer(std::string("\x01\x02\x03", 3)));
   EXPECT_NE(c.next("error")["message"].get<std::string>().find("binary"), std::string::npos);
@@ -230,7 +233,7 @@ TEST_F(LiveServer, ClientsVanishingMidFrameDoNotHurt) {
   start();
   for (int k = 0; k < 20; ++k) {
     Client c(port_);
-    c.read();  // hello arrives; frames are being sent
+    c.read();                   // hello arrives; frames are being sent
     c.ws.next_layer().close();  // no close handshake, mid-stream
   }
   expect_healthy();
@@ -260,9 +263,9 @@ TEST_F(LiveServer, NothingOutsideThePageFolderIsServed) {
   start();
   EXPECT_EQ(get(port_, "/"), 200);
   EXPECT_EQ(get(port_, "/index.html"), 200);
-  for (const char* t : {"/../secret.txt", "/%2e%2e/secret.txt", "/..%2fsecret.txt",
-                        "/web/../secret.txt", "/leak.html", "/.hidden", "//etc/passwd",
-                        "/index.html/../../secret.txt", "/nope.js"})
+  for (const char* t :
+       {"/../secret.txt", "/%2e%2e/secret.txt", "/..%2fsecret.txt", "/web/../secret.txt",
+        "/leak.html", "/.hidden", "//etc/passwd", "/index.html/../../secret.txt", "/nope.js"})
     EXPECT_EQ(get(port_, t), 404) << t;
   expect_healthy();
 }
@@ -287,9 +290,9 @@ TEST(LiveTool, CtrlCWhileRecordingLeavesAReadableResultsFile) {
   TempDir dir("live_tool");
   testing::write_live_case(dir.str());
   const std::string rec = dir / "rec", log = dir / "out.txt";
-  const std::string cmd = std::string("exec '") + SINEW_LIVE_TOOL + "' '" + (dir / "live_box.yaml") +
-                          "' --device cpu --threads 1 --port 0 --record '" + rec + "' > '" + log +
-                          "' 2>&1";
+  const std::string cmd =
+      std::string("exec '") + SINEW_LIVE_TOOL + "' '" + (dir / "live_box.yaml") +
+      "' --device cpu --threads 1 --port 0 --record '" + rec + "' > '" + log + "' 2>&1";
   pid_t pid = 0;
   const char* argv[] = {"sh", "-c", cmd.c_str(), nullptr};
   ASSERT_EQ(posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);

@@ -112,8 +112,8 @@ TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
     EXPECT_EQ(session.last_error(), "");
 
     const auto rec = so.record_dir;
-    for (const char* f : {"results.h5", "results.xdmf", "scene.yaml", "steering_log.json",
-                          "run_summary.json"})
+    for (const char* f :
+         {"results.h5", "results.xdmf", "scene.yaml", "steering_log.json", "run_summary.json"})
       EXPECT_TRUE(std::filesystem::exists(rec + "/" + f)) << f;
     auto ro = simulator::testing::options_for(rec + "/scene.yaml", dir / "reproduced");
     ro.device = GetParam();
@@ -128,8 +128,7 @@ TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
         const auto it = batch.find(st);
         ASSERT_NE(it, batch.end()) << name << ": no reproduced frame at step " << st;
         ASSERT_EQ(values.size(), it->second.size());
-        EXPECT_EQ(std::memcmp(values.data(), it->second.data(), values.size() * sizeof(double)),
-                  0)
+        EXPECT_EQ(std::memcmp(values.data(), it->second.data(), values.size() * sizeof(double)), 0)
             << name << " differs at step " << st;
         ++compared;
       }

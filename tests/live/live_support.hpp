@@ -34,7 +34,9 @@ inline void write_live_model(const std::string& path) {
 // holds; loads on (drags), damping 20/s; frames every 0.01 s with stress and J.
 inline std::string live_scene_text(const std::string& model) {
   return "title: live test block\n"
-         "model: " + model + "\n"
+         "model: " +
+         model +
+         "\n"
          "effects: [elasticity, hourglass, damping, muscles, loads]\n"
          "duration: 2.0\n"
          "damping: 20\n"

@@ -35,9 +35,8 @@ inline std::map<std::int64_t, std::vector<double>> frames_by_step(const std::str
   if (steps.empty() || all.size() % steps.size() != 0) return out;
   const std::size_t width = all.size() / steps.size();
   for (std::size_t f = 0; f < steps.size(); ++f)
-    out[std::int64_t(steps[f])] =
-        std::vector<double>(all.begin() + std::ptrdiff_t(f * width),
-                            all.begin() + std::ptrdiff_t((f + 1) * width));
+    out[std::int64_t(steps[f])] = std::vector<double>(
+        all.begin() + std::ptrdiff_t(f * width), all.begin() + std::ptrdiff_t((f + 1) * width));
   return out;
 }
 

@@ -70,8 +70,8 @@ const char* field_name(Field f) {
 
 Command parse_command(std::string_view text) {
   if (text.size() > kMaxMessageBytes)
-    throw ProtocolError(fmt::format("message too long ({} bytes, at most {})", text.size(),
-                                    kMaxMessageBytes));
+    throw ProtocolError(
+        fmt::format("message too long ({} bytes, at most {})", text.size(), kMaxMessageBytes));
   json m;
   try {
     m = json::parse(text);
@@ -127,10 +127,12 @@ Command parse_command(std::string_view text) {
       throw ProtocolError(fmt::format("'radius' must be in (0, {}] m", kMaxDragRadius));
     const double f = std::hypot(c.force[0], c.force[1], c.force[2]);
     if (f > kMaxDragForce)
-      throw ProtocolError(fmt::format("'force' {:.4g} N above the limit of {} N", f, kMaxDragForce));
+      throw ProtocolError(
+          fmt::format("'force' {:.4g} N above the limit of {} N", f, kMaxDragForce));
   } else if (type == "record") {
     allow(m, {"on"});
-    if (!m.contains("on") || !m.at("on").is_boolean()) throw ProtocolError("'on' must be true or false");
+    if (!m.contains("on") || !m.at("on").is_boolean())
+      throw ProtocolError("'on' must be true or false");
     c.kind = Command::Kind::record;
     c.on = m.at("on").get<bool>();
   } else if (type == "field") {
@@ -176,8 +178,7 @@ std::string encode_mesh(const std::vector<float>& rest,
 }
 
 std::string encode_frame(std::int64_t step, double time, Field field, std::uint32_t command_id,
-                         const std::vector<float>& displacement,
-                         const std::vector<float>& values) {
+                         const std::vector<float>& displacement, const std::vector<float>& values) {
   std::string out;
   out.reserve(kFrameHeaderBytes + 4 * (displacement.size() + values.size()));
   put(out, kTagFrame);

@@ -34,15 +34,15 @@ const char* field_name(Field f);
 struct Command {
   enum class Kind { activation, pause, resume, step, reset, drag, release, record, field };
   Kind kind = Kind::pause;
-  std::uint32_t id = 0;                // the client's id for it (0: none)
-  std::string muscle;                  // activation
-  std::optional<double> value;         // activation in [0, 1]; none: back to the curve
-  std::int64_t count = 1;              // step
-  std::array<double, 3> point{};       // drag: picked point, m (deformed position)
-  std::array<double, 3> force{};       // drag: total force, N, spread evenly over the nodes
-  double radius = 0;                   // drag: m
-  bool on = false;                     // record
-  Field field = Field::displacement;   // field
+  std::uint32_t id = 0;               // the client's id for it (0: none)
+  std::string muscle;                 // activation
+  std::optional<double> value;        // activation in [0, 1]; none: back to the curve
+  std::int64_t count = 1;             // step
+  std::array<double, 3> point{};      // drag: picked point, m (deformed position)
+  std::array<double, 3> force{};      // drag: total force, N, spread evenly over the nodes
+  double radius = 0;                  // drag: m
+  bool on = false;                    // record
+  Field field = Field::displacement;  // field
 };
 
 // Parses one control message. Throws ProtocolError with a message for the client.
@@ -58,7 +58,8 @@ struct ProtocolError : std::exception {
 std::string error_message(const std::string& message, std::uint32_t id = 0);
 
 // The binary messages.
-std::string encode_mesh(const std::vector<float>& rest, const std::vector<std::uint32_t>& triangles);
+std::string encode_mesh(const std::vector<float>& rest,
+                        const std::vector<std::uint32_t>& triangles);
 std::string encode_frame(std::int64_t step, double time, Field field, std::uint32_t command_id,
                          const std::vector<float>& displacement, const std::vector<float>& values);
 

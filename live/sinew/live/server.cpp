@@ -7,11 +7,11 @@
 #include <random>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
-#include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
@@ -87,9 +87,9 @@ struct Server::Impl : std::enable_shared_from_this<Server::Impl> {
     if (auth.size() > 7 && auth.substr(0, 7) == "Bearer " &&
         same_token(std::string_view(auth.data() + 7, auth.size() - 7), options.token))
       return true;
-    return same_token(query_value(std::string_view(req.target().data(), req.target().size()),
-                                  "token"),
-                      options.token);
+    return same_token(
+        query_value(std::string_view(req.target().data(), req.target().size()), "token"),
+        options.token);
   }
 };
 
@@ -172,9 +172,10 @@ class WsClient : public std::enable_shared_from_this<WsClient> {
     }
     if (++count_ > server_->options.max_messages_per_second) {
       if (!warned_)
-        send_text(error_message(fmt::format("more than {:.0f} messages per second: the rest of "
-                                            "this second's messages are dropped",
-                                            server_->options.max_messages_per_second)));
+        send_text(
+            error_message(fmt::format("more than {:.0f} messages per second: the rest of "
+                                      "this second's messages are dropped",
+                                      server_->options.max_messages_per_second)));
       warned_ = true;
       return;
     }
@@ -244,10 +245,9 @@ class HttpClient : public std::enable_shared_from_this<HttpClient> {
     parser_->header_limit(8 * 1024);
     parser_->body_limit(16 * 1024);
     stream_.expires_after(std::chrono::seconds(30));
-    http::async_read(stream_, buffer_, *parser_,
-                     [self = shared_from_this()](beast::error_code ec, std::size_t) {
-                       self->on_read(ec);
-                     });
+    http::async_read(
+        stream_, buffer_, *parser_,
+        [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
   }
 
  private:
@@ -297,8 +297,8 @@ class HttpClient : public std::enable_shared_from_this<HttpClient> {
       reply(http::status::internal_server_error, "cannot read the file", false);
       return;
     }
-    auto res = std::make_shared<http::response<http::string_body>>(http::status::ok,
-                                                                   request_.version());
+    auto res =
+        std::make_shared<http::response<http::string_body>>(http::status::ok, request_.version());
     res->set(http::field::content_type, std::string(content_type(*file)));
     res->set(http::field::cache_control, "no-store");
     res->set("X-Content-Type-Options", "nosniff");
@@ -339,15 +339,15 @@ class HttpClient : public std::enable_shared_from_this<HttpClient> {
 }  // namespace
 
 void Server::Impl::accept() {
-  acceptor.async_accept(net::make_strand(ioc), [self = shared_from_this()](
-                                                   beast::error_code ec, tcp::socket socket) {
-    if (ec) {
-      if (ec == net::error::operation_aborted) return;
-    } else {
-      std::make_shared<HttpClient>(std::move(socket), self)->read();
-    }
-    if (self->acceptor.is_open()) self->accept();
-  });
+  acceptor.async_accept(net::make_strand(ioc),
+                        [self = shared_from_this()](beast::error_code ec, tcp::socket socket) {
+                          if (ec) {
+                            if (ec == net::error::operation_aborted) return;
+                          } else {
+                            std::make_shared<HttpClient>(std::move(socket), self)->read();
+                          }
+                          if (self->acceptor.is_open()) self->accept();
+                        });
 }
 
 void Server::Impl::join(const std::shared_ptr<WsClient>& c) {
@@ -385,12 +385,10 @@ Server::Server(Session& session, ServerOptions options)
   if (!ec) a.set_option(net::socket_base::reuse_address(true), ec);
   if (!ec) a.bind(ep, ec);
   if (!ec) a.listen(net::socket_base::max_listen_connections, ec);
-  if (ec)
-    throw IoError(fmt::format("{}:{}", o.host, o.port), "", "cannot listen: " + ec.message());
+  if (ec) throw IoError(fmt::format("{}:{}", o.host, o.port), "", "cannot listen: " + ec.message());
   std::weak_ptr<Impl> weak = impl_;
   session.set_sink([weak](std::shared_ptr<const std::string> msg, bool binary) {
-    if (auto s = weak.lock())
-      net::post(s->ioc, [s, msg, binary] { s->broadcast(msg, binary); });
+    if (auto s = weak.lock()) net::post(s->ioc, [s, msg, binary] { s->broadcast(msg, binary); });
   });
   impl_->accept();
 }

@@ -171,8 +171,7 @@ std::string Session::hello_json() const {
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
-std::vector<formats::Index> Session::nodes_near(const std::array<double, 3>& point,
-                                                double radius) {
+std::vector<formats::Index> Session::nodes_near(const std::array<double, 3>& point, double radius) {
   // Current positions: rest + u(n); the picked point is on the deformed skin.
   const auto u = run_.backend->displacements();
   const auto& model = run_.model;
@@ -195,13 +194,14 @@ void Session::apply(const Command& c) {
   const std::int64_t n = backend.step_index();
   switch (c.kind) {
     case Command::Kind::activation: {
-      const auto m = std::size_t(
-          std::find(muscle_names_.begin(), muscle_names_.end(), c.muscle) - muscle_names_.begin());
+      const auto m = std::size_t(std::find(muscle_names_.begin(), muscle_names_.end(), c.muscle) -
+                                 muscle_names_.begin());
       backend.set_activation_override(m, c.value);
       log_.activations.push_back({n, m, backend.activation_override(m)});
       log_.events.emplace_back(
-          n, c.value ? fmt::format("activation {} = {:.17g}", c.muscle, *backend.activation_override(m))
-                     : fmt::format("activation {} back to its curve", c.muscle));
+          n, c.value
+                 ? fmt::format("activation {} = {:.17g}", c.muscle, *backend.activation_override(m))
+                 : fmt::format("activation {} back to its curve", c.muscle));
       break;
     }
     case Command::Kind::pause:
@@ -333,8 +333,8 @@ void Session::finish_recording() {
   summary.simulated_time = backend.time() / s;
   summary.frames = writer_->frame_count();
   simulator::write_run_summary((dir / "run_summary.json").string(), summary);
-  log::info("recorded {} frames to {} (reproduce: sinew-simulate {} -o OUT)", writer_->frame_count(),
-            record_dir_, (dir / "scene.yaml").string());
+  log::info("recorded {} frames to {} (reproduce: sinew-simulate {} -o OUT)",
+            writer_->frame_count(), record_dir_, (dir / "scene.yaml").string());
   writer_.reset();
 }
 
@@ -352,9 +352,10 @@ void Session::publish_frame(bool force) {
       for (std::size_t k = 0; k < 3; ++k) d[k] += w * sub[3 * slot + k];
     for (std::size_t k = 0; k < 3; ++k) disp[3 * v + k] = float(d[k]);
     const auto e = std::size_t(surface_.element[v]);
-    values[v] = field_ == Field::von_mises  ? float(fields.von_mises[e])
-                : field_ == Field::jacobian ? float(fields.jacobian[e])
-                                            : float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    values[v] = field_ == Field::von_mises ? float(fields.von_mises[e])
+                : field_ == Field::jacobian
+                    ? float(fields.jacobian[e])
+                    : float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
   }
   auto frame = std::make_shared<const std::string>(
       encode_frame(backend.step_index(), backend.time() / run_.resolved.setup.time_scaling, field_,
@@ -394,8 +395,8 @@ void Session::publish_status() {
             {"overrides", overrides},
             {"last_id", last_id_},
             {"error", error.empty() ? json(nullptr) : json(error)}};
-  auto msg = std::make_shared<const std::string>(
-      j.dump(-1, ' ', false, json::error_handler_t::replace));
+  auto msg =
+      std::make_shared<const std::string>(j.dump(-1, ' ', false, json::error_handler_t::replace));
   Sink sink;
   {
     std::lock_guard lock(mutex_);
@@ -447,7 +448,8 @@ void Session::loop() {
       writer_.reset();
     }
     const std::int64_t n = backend.step_index();
-    if (options_.pause_at_end && !at_end_ && n >= run_.backend->plan().steps && n > 0 && !paused_ && pending_steps_ == 0) {
+    if (options_.pause_at_end && !at_end_ && n >= run_.backend->plan().steps && n > 0 && !paused_ &&
+        pending_steps_ == 0) {
       // The scene's duration is reached: pause once; resume runs on past it.
       at_end_ = true;
       paused_ = true;

@@ -38,22 +38,22 @@ namespace sinew::live {
 void make_live_setup(simulator::Setup& setup);
 
 struct SessionOptions {
-  double frame_rate = 30;         // frames per second streamed (at most)
-  double chunk_seconds = 0.004;   // wall time per chunk of steps (command latency)
-  double max_speed = 0;           // simulated s per wall s at most (0: as fast as it goes)
-  std::string record_dir;         // record from the start into this folder ("" none)
+  double frame_rate = 30;        // frames per second streamed (at most)
+  double chunk_seconds = 0.004;  // wall time per chunk of steps (command latency)
+  double max_speed = 0;          // simulated s per wall s at most (0: as fast as it goes)
+  std::string record_dir;        // record from the start into this folder ("" none)
   bool start_paused = false;
-  bool pause_at_end = true;       // pause once when the scene's duration is reached
-  std::string surface;            // visual surface to stream ("" the first visual one)
-  double drag_radius_default = 0; // m (0: 3 voxels)
+  bool pause_at_end = true;        // pause once when the scene's duration is reached
+  std::string surface;             // visual surface to stream ("" the first visual one)
+  double drag_radius_default = 0;  // m (0: 3 voxels)
 };
 
 // What the page needs to draw the model: the streamed surface at rest.
 struct SurfaceView {
   std::string name;
-  std::vector<float> rest;                   // V × 3, m
-  std::vector<std::uint32_t> triangles;      // T × 3
-  std::vector<formats::Index> nodes;         // the nodes the surface's vertices depend on
+  std::vector<float> rest;               // V × 3, m
+  std::vector<std::uint32_t> triangles;  // T × 3
+  std::vector<formats::Index> nodes;     // the nodes the surface's vertices depend on
   // Per vertex its 8 (index into nodes, trilinear weight) of its embedding element, and element.
   std::vector<std::array<std::pair<std::uint32_t, double>, 8>> weights;
   std::vector<formats::Index> element;

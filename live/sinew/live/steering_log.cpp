@@ -26,8 +26,8 @@ double curve_value(const simulator::Curve& c, double t) {
 
 // Appends knots so that steps [a, b] evaluate exactly as `c` does. first: nothing before step a
 // is in the curve yet (a == 0); last: no knot follows (the curve holds to the end).
-void add_original(std::vector<std::array<double, 2>>& k, const simulator::Curve& c,
-                  std::int64_t a, std::int64_t b, double dt, double s, bool first, bool last) {
+void add_original(std::vector<std::array<double, 2>>& k, const simulator::Curve& c, std::int64_t a,
+                  std::int64_t b, double dt, double s, bool first, bool last) {
   const double ta = knot_time(a, dt, s), tb = knot_time(b, dt, s);
   if (c.points.empty()) {  // activation 0 throughout
     k.push_back({ta, 0.0});
@@ -37,12 +37,12 @@ void add_original(std::vector<std::array<double, 2>>& k, const simulator::Curve&
   const auto& p = c.points;
   // Original knots strictly inside (ta, tb), and the steps before the first and after the last
   // of them, which lie on cut segments.
-  std::size_t lo = std::size_t(std::upper_bound(p.begin(), p.end(), ta,
-                                                [](double x, const auto& q) { return x < q[0]; }) -
-                               p.begin());
-  std::size_t hi = std::size_t(std::lower_bound(p.begin(), p.end(), tb,
-                                                [](const auto& q, double x) { return q[0] < x; }) -
-                               p.begin());
+  std::size_t lo = std::size_t(
+      std::upper_bound(p.begin(), p.end(), ta, [](double x, const auto& q) { return x < q[0]; }) -
+      p.begin());
+  std::size_t hi = std::size_t(
+      std::lower_bound(p.begin(), p.end(), tb, [](const auto& q, double x) { return q[0] < x; }) -
+      p.begin());
   // Steps [from, to] that all lie on original segment j (between points j − 1 and j; j = 0 the
   // hold before the first point, j = size the hold after the last): a knot per step unless the
   // segment is flat (then its value is every step's, and two knots give it exactly).
@@ -200,8 +200,7 @@ std::string reproduce_scene(const simulator::Scene& scene, const std::string& sc
   return j.dump(1) + "\n";
 }
 
-std::string steering_log_json(const SteeringLog& log, double dt, double s,
-                              std::int64_t end_step) {
+std::string steering_log_json(const SteeringLog& log, double dt, double s, std::int64_t end_step) {
   json j;
   j["format"] = "sinew-live steering log";
   j["version"] = 1;

@@ -34,7 +34,7 @@ struct DragSpan {
   std::int64_t start = 0, end = -1;  // steps [start, end); end −1: still held
   std::vector<formats::Index> nodes;
   std::array<double, 3> total{};  // N, spread evenly: each node gets total · (1 / nodes), as a
-                                 // scene's force condition without per_node spreads its value
+                                  // scene's force condition without per_node spreads its value
 };
 
 struct SteeringLog {
@@ -47,10 +47,9 @@ struct SteeringLog {
 // The knots (scene time, value) of muscle m's activation over steps 0 .. end_step when `changes`
 // (this muscle's, in step order) override its scene curve `original`. dt: the run's Δt; s: its
 // time scaling.
-std::vector<std::array<double, 2>> reproduce_activation(const simulator::Curve& original,
-                                                        const std::vector<ActivationChange>& changes,
-                                                        double dt, double s,
-                                                        std::int64_t end_step);
+std::vector<std::array<double, 2>> reproduce_activation(
+    const simulator::Curve& original, const std::vector<ActivationChange>& changes, double dt,
+    double s, std::int64_t end_step);
 
 // The scene (JSON, which the YAML scene reader reads) that reproduces the session up to end_step:
 // the original scene's keys with `model` made absolute, `duration` = end_step · Δt / s, the live

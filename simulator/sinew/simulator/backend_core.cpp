@@ -253,13 +253,15 @@ void BackendCore::set_activation_override(std::size_t m, std::optional<double> a
     throw ConfigError("", "activation",
                       "this run was not planned for activation overrides (a live run is)");
   if (m >= muscle_count())
-    throw ConfigError("", "activation", fmt::format("muscle {} out of range (the run simulates {})",
-                                                    m, muscle_count()));
+    throw ConfigError(
+        "", "activation",
+        fmt::format("muscle {} out of range (the run simulates {})", m, muscle_count()));
   if (a && !std::isfinite(*a))
     throw ConfigError("", "activation", "the activation must be a finite number");
   activation_override_.resize(muscle_count());
   // Clamped as the curves are; + 0.0 turns −0 into +0 (the curve of a reproduced scene gives +0).
-  activation_override_[m] = a ? std::optional<double>(std::clamp(*a, 0.0, 1.0) + 0.0) : std::nullopt;
+  activation_override_[m] =
+      a ? std::optional<double>(std::clamp(*a, 0.0, 1.0) + 0.0) : std::nullopt;
 }
 
 std::optional<double> BackendCore::activation_override(std::size_t m) const {

@@ -196,7 +196,7 @@ class BackendCore {
   PreparedModel prepared_;
   std::size_t muscle_count_ = 0;
   std::vector<std::optional<double>> activation_override_;  // per muscle (empty: none set)
-  std::size_t force_slots_ = 0;                              // the last entries of prepared_.forces
+  std::size_t force_slots_ = 0;                             // the last entries of prepared_.forces
   // J, ε · volume · min modulus (the strain energy's round-off) + ½ · total mass · (ε · max |x| /
   // Δt)² (the kinetic energy of positions moving by their own round-off each step); docs/physics.md
   // "Instability".

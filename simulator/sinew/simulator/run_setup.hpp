@@ -32,8 +32,7 @@ struct LoadedRun {
 // Loads and plans options.scene_path on options.device. `adjust`, when given, may change the
 // resolved Setup before the engine is built (sinew-live adds its force slots). Throws ConfigError /
 // FormatError / IoError / ResourceError naming the file and key.
-LoadedRun load_run(const RunOptions& options,
-                   const std::function<void(Setup&)>& adjust = nullptr);
+LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>& adjust = nullptr);
 
 // The plan, device, outputs, probes, warnings and run estimate as `--explain` prints them.
 std::string explain_run(LoadedRun& run, const std::string& output_dir);

@@ -16,9 +16,9 @@
 #include "sinew/common/progress.hpp"
 #include "sinew/simulator/checkpoint.hpp"
 #include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/output_schedule.hpp"
 #include "sinew/simulator/probes.hpp"
 #include "sinew/simulator/results_writer.hpp"
-#include "sinew/simulator/output_schedule.hpp"
 #include "sinew/simulator/run_limits.hpp"
 #include "sinew/simulator/run_setup.hpp"
 

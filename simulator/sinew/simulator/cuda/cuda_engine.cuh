@@ -69,7 +69,8 @@ class CudaEngine final : public Backend, public CudaTiming {
   }
   // Live force slots would re-upload the constraint program under captured graphs: not built yet.
   std::size_t force_slot_count() const override { return 0; }
-  void set_force_slot(std::size_t, const std::vector<Index>&, const std::array<double, 3>&) override {
+  void set_force_slot(std::size_t, const std::vector<Index>&,
+                      const std::array<double, 3>&) override {
     throw ConfigError("", "drag",
                       "drag forces are not available on the CUDA backend yet (docs/live.md); use "
                       "--device cpu to drag");
