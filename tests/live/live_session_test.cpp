@@ -189,6 +189,60 @@ TEST_P(LiveSession, SliderAndDragMoveTheSkin) {
   session.stop();
 }
 
+TEST_P(LiveSession, InstabilityPausesWithTheEnginesMessageAndResetRecovers) {
+  if (GetParam() == "cuda") GTEST_SKIP() << "drag forces are CPU-only (docs/live.md)";
+  TempDir dir("live_unstable");
+  testing::write_live_case(dir.str());
+  simulator::RunOptions o;
+  o.scene_path = dir / "live_box.yaml";
+  o.device = GetParam();
+  SessionOptions so;
+  so.start_paused = true;
+  Session session(simulator::load_run(o, make_live_setup), so);
+  session.start();
+  // 100 N on the soft block's free corner inverts its elements within a few steps.
+  Command drag;
+  drag.kind = Command::Kind::drag;
+  drag.point = {0.024, 0.008, 0.006};
+  drag.force = {0, 0, 100};
+  drag.radius = 0.001;
+  session.submit(drag);
+  Command c;
+  c.kind = Command::Kind::step;
+  c.count = 2000;
+  session.submit(c);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (session.last_error().empty() &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  const std::string message = session.last_error();
+  ASSERT_FALSE(message.empty()) << "the drag should have made the run unstable";
+  EXPECT_NE(message.find("step"), std::string::npos) << message;
+  EXPECT_TRUE(session.paused());
+  const std::int64_t stopped = session.step_index();
+  EXPECT_LT(stopped, 2000);
+  // The status tells the page (published after the failure, with the message).
+  for (int k = 0; k < 100 && session.latest_status()->find("\"error\":null") != std::string::npos;
+       ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_NE(session.latest_status()->find("\"error\":\""), std::string::npos);
+  // The engine stayed at its last good state: the frame is finite.
+  const auto f = session.latest_frame();
+  std::vector<float> d((f->size() - kFrameHeaderBytes) / 4);
+  std::memcpy(d.data(), f->data() + kFrameHeaderBytes, d.size() * 4);
+  for (float x : d) ASSERT_TRUE(std::isfinite(x));
+  // Reset: the error clears, the drag is gone, and the engine steps again.
+  Command reset;
+  reset.kind = Command::Kind::reset;
+  session.submit(reset);
+  ASSERT_TRUE(session.wait_idle(10));
+  EXPECT_EQ(session.last_error(), "");
+  EXPECT_EQ(session.step_index(), 0);
+  step(session, 300);
+  EXPECT_EQ(session.last_error(), "");
+  session.stop();
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, LiveSession, ::testing::Values("cpu", "cuda"),
                          [](const auto& info) { return info.param; });
 

@@ -338,8 +338,7 @@ void Session::finish_recording() {
   writer_.reset();
 }
 
-void Session::publish_frame(bool force) {
-  (void)force;
+void Session::publish_frame() {
   auto& backend = *run_.backend;
   const auto sub = backend.displacements(surface_.nodes);
   const std::size_t nv = surface_.weights.size();
@@ -360,13 +359,18 @@ void Session::publish_frame(bool force) {
   auto frame = std::make_shared<const std::string>(
       encode_frame(backend.step_index(), backend.time() / run_.resolved.setup.time_scaling, field_,
                    last_id_, disp, values));
+  publish(frame, true, latest_frame_);
+}
+
+void Session::publish(std::shared_ptr<const std::string> msg, bool binary,
+                      std::shared_ptr<const std::string>& latest) {
   Sink sink;
   {
     std::lock_guard lock(mutex_);
-    latest_frame_ = frame;
+    latest = msg;
     sink = sink_;
   }
-  if (sink) sink(frame, true);
+  if (sink) sink(std::move(msg), binary);
 }
 
 void Session::publish_status() {
@@ -397,13 +401,7 @@ void Session::publish_status() {
             {"error", error.empty() ? json(nullptr) : json(error)}};
   auto msg =
       std::make_shared<const std::string>(j.dump(-1, ' ', false, json::error_handler_t::replace));
-  Sink sink;
-  {
-    std::lock_guard lock(mutex_);
-    latest_status_ = msg;
-    sink = sink_;
-  }
-  if (sink) sink(msg, false);
+  publish(std::move(msg), false, latest_status_);
 }
 
 void Session::loop() {
@@ -418,7 +416,7 @@ void Session::loop() {
   std::int64_t rate_steps = 0;
   double rate_wall = 0;
   chunk_ = 1;
-  publish_frame(true);
+  publish_frame();
   publish_status();
   while (!stop_) {
     std::vector<Command> commands;
@@ -499,7 +497,7 @@ void Session::loop() {
     }
     const bool frame_due = seconds_since(last_frame) >= frame_period;
     if (changed_ || (run && frame_due)) {
-      publish_frame(changed_);
+      publish_frame();
       last_frame = Clock::now();
     }
     if (changed_ || seconds_since(last_status) >= 0.25) {

@@ -93,8 +93,11 @@ class Session {
  private:
   void loop();
   void apply(const Command& c);
-  void publish_frame(bool force);
+  void publish_frame();
   void publish_status();
+  // Keeps msg as the latest of its kind (for new clients) and hands it to the sink.
+  void publish(std::shared_ptr<const std::string> msg, bool binary,
+               std::shared_ptr<const std::string>& latest);
   void start_recording(const std::string& dir);
   void record_frame_if_due();
   void finish_recording();
