@@ -114,6 +114,9 @@ inline int run_scene_timing(const SceneTimingOptions& o) {
         std::printf("  stage %-12s %9.4f ms/step  %5.1f%%\n", stage.c_str(),
                     s.steps_this_run > 0 ? 1e3 * seconds / double(s.steps_this_run) : 0.0,
                     run_ms > 0 ? 100 * 1e3 * seconds / double(s.steps_this_run) / run_ms : 0.0);
+      std::printf("  frames: %lld, written in %.3f s (on the frame thread where the backend steps "
+                  "on the GPU)\n",
+                  (long long)s.frames, s.frame_writing_s);
       const double simulated_per_wall =
           s.wall_time_s > 0 ? s.simulated_time / s.wall_time_s : 0.0;  // scene time
       char line[512];

@@ -268,6 +268,31 @@ TEST(CudaBackend, RestoredRunContinuesBitIdentically) {
   EXPECT_EQ(a->state().sliding_triangle, b->state().sliding_triangle);
 }
 
+// Calls of any length (the runner stops at every frame and probe row) run as batch graphs, stretch
+// graphs captured for their phase, or single launches: all give the bits of one long call, in both
+// precisions, with sliding (lists refreshed ahead in graphs, inline in single launches).
+TEST(CudaBackend, CallsOfAnyLengthGiveTheBitsOfOneLongCall) {
+  SKIP_WITHOUT_GPU();
+  for (Precision p : {Precision::float32, Precision::float64}) {
+    const Scene s = muscle_sliding_scene(p);
+    auto whole = make_cuda_backend(s.model, s.setup);
+    auto cut = make_cuda_backend(s.model, s.setup);
+    const std::vector<std::int64_t> calls = {1, 2, 73, 74, 29, 31, 7, 96, 200, 1, 13, 59, 3, 411};
+    std::int64_t total = 0;
+    for (auto n : calls) {
+      cut->step(n);
+      total += n;
+    }
+    whole->step(total);
+    ASSERT_EQ(cut->step_index(), whole->step_index());
+    const auto a = whole->displacements(), b = cut->displacements();
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(double)))
+        << (p == Precision::float32 ? "float" : "double");
+    EXPECT_EQ(whole->state().sliding_triangle, cut->state().sliding_triangle);
+    EXPECT_EQ(whole->energies().external_work, cut->energies().external_work);
+  }
+}
+
 TEST(CudaBackend, InstabilityIsDetectedWithTheStateAtTheLastGoodStep) {
   SKIP_WITHOUT_GPU();
   const auto model = block(8, 8, 8, 1e-3, neo_hookean(1000, 0.49, 1000));
@@ -289,6 +314,17 @@ TEST(CudaBackend, InstabilityIsDetectedWithTheStateAtTheLastGoodStep) {
   std::printf("[ measured ] %s\n", message.c_str());
   EXPECT_NE(message.find("at step"), std::string::npos);
   for (double v : gpu->displacements()) ASSERT_TRUE(std::isfinite(v)) << "state not at a good step";
+  // Calls of 73 steps (stretch graphs between the aligned ones) stop at the same step with the
+  // same message.
+  auto cut = make_cuda_backend(model, s);
+  std::string cut_message;
+  try {
+    for (int k = 0; k < 20000 / 73 + 1; ++k) cut->step(73);
+  } catch (const InstabilityError& e) {
+    cut_message = e.what();
+  }
+  EXPECT_EQ(cut_message, message);
+  EXPECT_EQ(cut->step_index(), gpu->step_index());
 }
 
 // The same with muscles and sliding (the accuracy study's forehead at 0.9 h/c once ended in an

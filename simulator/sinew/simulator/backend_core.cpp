@@ -516,6 +516,25 @@ ElementFields BackendCore::element_fields(const EngineArrays<T>& a, const Vec3<T
                                           std::int64_t step, int threads) const {
   std::vector<T> activation(muscle_count());
   activations(time(step), activation.data());
+  return fields_at(a, u, activation.data(), threads);
+}
+
+template <typename T>
+std::function<ElementFields()> BackendCore::deferred_element_fields(const EngineArrays<T>& a,
+                                                                    std::vector<Vec3<T>> u,
+                                                                    std::int64_t step,
+                                                                    int threads) const {
+  // The activations are read now: whatever steers them later must not reach this frame.
+  std::vector<T> activation(muscle_count());
+  activations(time(step), activation.data());
+  return [this, &a, u = std::move(u), activation = std::move(activation), threads] {
+    return fields_at(a, u.data(), activation.data(), threads);
+  };
+}
+
+template <typename T>
+ElementFields BackendCore::fields_at(const EngineArrays<T>& a, const Vec3<T>* u,
+                                     const T* activation, int threads) const {
   const ElementData<T> d = a.element_data();
   const std::size_t e_count = elements();
   ElementFields out;
@@ -530,7 +549,7 @@ ElementFields BackendCore::element_fields(const EngineArrays<T>& a, const Vec3<T
         for_each_chunk<T>(e_count, threads, [&](std::size_t, std::size_t begin, std::size_t end) {
           for (std::size_t e = begin; e < end; ++e) {
             const ElementStart<T> s =
-                element_start<T, kMuscle>(d, std::int32_t(e), activation.data());
+                element_start<T, kMuscle>(d, std::int32_t(e), activation);
             Vec3<T> ue[8];
             for (int c = 0; c < 8; ++c) ue[c] = u[s.ids[c]];
             T j;
@@ -570,7 +589,9 @@ ElementFields BackendCore::element_fields(const EngineArrays<T>& a, const Vec3<T
   template std::array<double, 3> BackendCore::reaction<T>(                                       \
       const EngineArrays<T>&, const std::vector<Index>&, const Vec3<T>*, std::int64_t) const;    \
   template ElementFields BackendCore::element_fields<T>(const EngineArrays<T>&, const Vec3<T>*,  \
-                                                        std::int64_t, int) const;
+                                                        std::int64_t, int) const;                \
+  template std::function<ElementFields()> BackendCore::deferred_element_fields<T>(               \
+      const EngineArrays<T>&, std::vector<Vec3<T>>, std::int64_t, int) const;
 SINEW_BACKEND_CORE_INSTANTIATE(float)
 SINEW_BACKEND_CORE_INSTANTIATE(double)
 #undef SINEW_BACKEND_CORE_INSTANTIATE

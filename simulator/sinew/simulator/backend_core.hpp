@@ -13,6 +13,7 @@
 // built here.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -185,12 +186,24 @@ class BackendCore {
   template <typename T>
   std::array<double, 3> reaction(const EngineArrays<T>& a, const std::vector<Index>& nodes,
                                  const Vec3<T>* set_forces, std::int64_t step) const;
-  // Per-element output fields at u (Backend::element_fields), threads as kinetic_energy.
+  // Per-element output fields at u (Backend::element_fields) with the activations of `step`,
+  // threads as kinetic_energy.
   template <typename T>
   ElementFields element_fields(const EngineArrays<T>& a, const Vec3<T>* u, std::int64_t step,
                                int threads) const;
+  // The same fields, computed later by the returned function from this copy of u and the
+  // activations of `step` read now (Frame::fields); `a` and this core must outlive it.
+  template <typename T>
+  std::function<ElementFields()> deferred_element_fields(const EngineArrays<T>& a,
+                                                         std::vector<Vec3<T>> u,
+                                                         std::int64_t step, int threads) const;
 
  private:
+  // element_fields with the activations given (muscle_count() values).
+  template <typename T>
+  ElementFields fields_at(const EngineArrays<T>& a, const Vec3<T>* u, const T* activation,
+                          int threads) const;
+
   Setup setup_;
   Plan plan_;
   PreparedModel prepared_;

@@ -102,6 +102,11 @@ class CpuEngine final : public Backend {
     core_.clear_force_slot(k);
     a_.constraints = make_constraint_program<T>(core_.prepared());
   }
+  Frame frame(bool with_fields) override {
+    Frame f{step_, time(), displacements(), energies(), {}};
+    if (with_fields) f.fields = core_.deferred_element_fields(a_, u_, step_, threads_);
+    return f;
+  }
 
  private:
   void ensure_forces(bool energy) {

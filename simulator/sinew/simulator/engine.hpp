@@ -15,6 +15,7 @@
 // position; the state stays at u(n), where the problem was found (nothing non-finite is accepted).
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -44,6 +45,18 @@ struct ElementFields {
                                               // (xx, yy, zz, yz, xz, xy)
   std::vector<double> energy_density;         // J/m³ of reference volume (hourglass excluded)
   std::vector<Index> material;                // dominant material (largest fraction)
+};
+
+// What a results frame needs, taken at one step (Backend::frame). The element fields are computed
+// later by `fields`, from a copy of u(n) and the step's activations taken with the frame, on any
+// thread while the backend steps on (the runner writes frames in the background on the GPU). The
+// backend must outlive `fields`; the result is exactly element_fields() at that step.
+struct Frame {
+  std::int64_t step = 0;
+  double time = 0;                        // s, engine time (step · Δt)
+  std::vector<double> displacements;      // N × 3, m, u(n)
+  Energies energies;                      // energies() at the step
+  std::function<ElementFields()> fields;  // empty unless asked for
 };
 
 class Backend {
@@ -90,6 +103,12 @@ class Backend {
   virtual void set_force_slot(std::size_t k, const std::vector<Index>& nodes,
                               const std::array<double, 3>& force) = 0;
   virtual void clear_force_slot(std::size_t k) = 0;
+  // The frame at the current step: displacements and energies now, the element fields (when
+  // `with_fields`) deferred (Frame).
+  virtual Frame frame(bool with_fields) = 0;
+  // True when step() leaves the host thread mostly waiting (the GPU), so frames are best written
+  // by another thread meanwhile; false when stepping keeps every core busy (the CPU).
+  virtual bool host_idle_while_stepping() const { return false; }
 };
 
 // The CPU backend for the Setup's precision. Throws ConfigError on a bad Setup (see make_plan).

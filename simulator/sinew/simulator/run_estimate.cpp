@@ -38,10 +38,11 @@ RunEstimate estimate_run(Backend& backend, const ResolvedScene& resolved,
     backend.step(half);
     e.step_s = seconds_of([&] { backend.step(half); }) / double(half);
     e.warmup_steps = 2 * half;
+    // A frame as the runner takes it; its fields are computed here too, as they are on the step
+    // loop's thread where frames are not written in the background (the CPU).
     e.frame_s = seconds_of([&] {
-      backend.displacements();
-      if (fields) backend.element_fields();
-      backend.energies();
+      Frame frame = backend.frame(fields);
+      if (frame.fields && !backend.host_idle_while_stepping()) frame.fields();
     });
     if (!resolved.probes.empty())
       e.row_s = seconds_of([&] {

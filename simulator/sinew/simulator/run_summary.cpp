@@ -52,6 +52,7 @@ std::string to_json(const RunSummary& s) {
   }
   j["loop_stages_s"] = std::move(stages);
   j["time_per_step_by_stage_s"] = std::move(per_step);
+  j["frame_writing_s"] = s.frame_writing_s;
   j["frames"] = s.frames;
   auto energies = nlohmann::ordered_json::array();
   for (const auto& e : s.energies) {

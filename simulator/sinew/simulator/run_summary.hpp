@@ -34,9 +34,14 @@ struct RunSummary {
   double time_per_step_s = 0;  // wall time of the step loop / steps_this_run
   double setup_s = 0;          // wall time before the step loop: model, plan, engine, writers
   // The step loop's wall time by stage (s, this process), in this order: "steps" (inside
-  // Backend::step), "frames" (fields, displacements and energies of each frame), "probes",
-  // "checkpoints", "summary" (this file), "other" (progress, the loop's own work).
+  // Backend::step), "frames" (taking each frame: displacements and energies, and on the CPU its
+  // fields and writing; on the GPU waiting for the frame thread when it falls behind), "probes",
+  // "checkpoints" (with the wait for pending frames), "summary" (this file), "other" (progress,
+  // the loop's own work).
   std::vector<std::pair<std::string, double>> loop_stages;
+  // s spent writing frames (element fields, HDF5, indexes): on the GPU on the frame thread,
+  // overlapped with the steps; on the CPU inside the "frames" stage.
+  double frame_writing_s = 0;
   std::int64_t frames = 0;
   std::vector<Energies> energies;  // one per frame, simulated time
   std::vector<std::string> warnings;

@@ -16,6 +16,7 @@
 #include "sinew/common/progress.hpp"
 #include "sinew/simulator/checkpoint.hpp"
 #include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/frame_writer.hpp"
 #include "sinew/simulator/output_schedule.hpp"
 #include "sinew/simulator/probes.hpp"
 #include "sinew/simulator/results_writer.hpp"
@@ -152,20 +153,22 @@ RunResult run_scene(const RunOptions& options) {
   OutputSchedule frames(resolved.output_interval, s, dt, total, false);
   OutputSchedule rows(resolved.probe_interval, s, dt, total, !(resolved.probe_interval > 0));
 
+  // Frames are written on another thread while a GPU steps on (frame_writer.hpp).
+  FrameWriter frame_writer(*results, backend->host_idle_while_stepping(), s);
   const auto write_summary = [&] {
     summary.steps_done = backend->step_index();
     summary.simulated_time = scene_time();
-    summary.frames = results->frame_count();
+    summary.frames = frame_writer.frames_written();
+    summary.frame_writing_s = frame_writer.write_seconds();
     summary.wall_time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     write_run_summary(summary_path, summary);
   };
   bool hourglass_warned = false;
   const auto write_frame = [&] {
-    const auto u = backend->displacements();
-    const ElementFields fields = want_fields ? backend->element_fields() : ElementFields{};
-    results->append_frame(scene_time(), backend->step_index(), u, fields);
-    auto e = backend->energies();
+    Frame frame = backend->frame(want_fields);
+    auto e = frame.energies;
+    frame_writer.push(std::move(frame));
     e.time /= s;  // the summary speaks scene time throughout
     summary.energies.push_back(e);
     // One-point elements can fold into hourglass modes that the centre Jacobian does not see
@@ -183,6 +186,7 @@ RunResult run_scene(const RunOptions& options) {
         [&](const std::vector<Index>& nodes) { return backend->reaction(nodes); });
   };
   const auto write_ckpt = [&] {
+    frame_writer.finish();  // never a checkpoint ahead of the frames on disk
     Checkpoint c;
     c.state = backend->state();
     c.digest = digest;
@@ -256,6 +260,11 @@ RunResult run_scene(const RunOptions& options) {
       }
     }
   } catch (const InstabilityError& e) {
+    try {
+      frame_writer.finish();  // every frame so far in the file
+    } catch (const Error&) {
+      // The instability is the error to report; the summary is written below.
+    }
     finish_loop();
     summary.status = "unstable";
     summary.message = e.what();
@@ -266,6 +275,7 @@ RunResult run_scene(const RunOptions& options) {
     summary.status = "failed";
     summary.message = e.what();
     try {
+      frame_writer.finish();
       write_summary();
     } catch (const Error&) {
       // The original error is the one to report.
@@ -273,6 +283,7 @@ RunResult run_scene(const RunOptions& options) {
     throw;
   }
   progress.finish();
+  clock.time(StageClock::frames, [&] { frame_writer.finish(); });
   finish_loop();
   summary.status = "completed";
   write_summary();

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -76,6 +77,8 @@ class CudaEngine final : public Backend, public CudaTiming {
                       "--device cpu to drag");
   }
   void clear_force_slot(std::size_t) override {}
+  Frame frame(bool with_fields) override;
+  bool host_idle_while_stepping() const override { return true; }
 
   // step() queues this many graph batches' worth of steps between host synchronisations.
   static constexpr int kQueuedBatches = 8;
@@ -110,17 +113,28 @@ class CudaEngine final : public Backend, public CudaTiming {
   // ahead: sliding lists refreshed ahead on slide_stream_ (graph steps, stage timing); direct
   // steps refresh inline and never miss. programmatic: the kernels that follow a kernel in s are
   // programmatic dependent launches (graph steps with programmatic_).
+  // refresh_origin: with ahead_slide, the lists are refreshed at steps ≡ refresh_origin (mod
+  // refresh interval) (a graph's first step).
   void launch_step(std::int64_t step, int slot, cudaStream_t s, bool ahead_slide,
                    bool blowup_test = false,
                    std::vector<std::pair<std::string, cudaEvent_t>>* marks = nullptr,
-                   bool programmatic = false);
+                   bool programmatic = false, std::int64_t refresh_origin = 0);
   std::vector<std::pair<std::string, float>> stage_times(int repeats) override;
-  cudaGraphExec_t capture_steps(int count);
+  // The graph of `count` steps starting at a step ≡ phase (mod align_): scalars in slots 0 ..
+  // count − 1, lists refreshed at its first step.
+  cudaGraphExec_t capture_steps(int count, int phase = 0);
+  // The cached graph of `count` steps from phase `phase` (step() between outputs); null when the
+  // cache is full.
+  cudaGraphExec_t stretch_graph(int phase, int count);
   void build_graph();
+  void destroy_graphs();
   void run_direct_step();  // one step with its scalars, synchronised and checked
   void snapshot();
   void roll_back();
   std::vector<Vec3<T>> download_vec(const Vec3<T>* p) const;  // N vectors
+  // N vectors through the pinned output buffer on the copy stream, after the steps queued so far.
+  std::vector<Vec3<T>> download_pinned(const Vec3<T>* from) const;
+  Energies energies_at(const std::vector<Vec3<T>>& u);  // u: u(n) on the host
   std::vector<Vec3<T>> download_vec_n(const Vec3<T>* p, std::size_t count) const;
   void compute_internal_forces();  // f_ at u(n), on the device
   // The vectors of the listed nodes (ids checked by the caller), gathered on the device and copied
@@ -166,6 +180,10 @@ class CudaEngine final : public Backend, public CudaTiming {
   bool programmatic_ = false;
   cudaGraphExec_t graph_ = nullptr;        // batch_ steps
   cudaGraphExec_t short_graph_ = nullptr;  // align_ steps (null when align_ = batch_)
+  // Stretches between outputs that start or end off the align_ grid, by (phase, steps): captured
+  // on first use, so a run whose probes fall every 73 steps runs them as graphs too.
+  std::map<std::pair<int, int>, cudaGraphExec_t> stretch_graphs_;
+  static constexpr std::size_t kMaxStretchGraphs = 128;
 
   // elements
   DeviceArray<std::array<Index, 8>> elem_nodes_;
@@ -188,6 +206,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<Vec3<T>> buf_[3];
   DeviceArray<Vec3<T>> snap_u_, snap_up_;
   DeviceArray<double> element_energy_;
+  DeviceArray<double> energy_chunk_sum_;  // 2 per chunk of each collection (energies)
   // per-step scalars: per slot [activation (M) | force factors (F) | prescribed factors (P)];
   // device slots 0 .. batch_ − 1 for the graph, slot batch_ for a single launched step; staged on
   // the host in a pinned ring of ring_rows_ rows (fill_scalars).

@@ -55,30 +55,42 @@ void CudaEngine<T>::compute_energy_terms(double& strain, double& hourglass) {
   DeviceArray<T> a;
   upload_activation(a);
   launch_elements(buffer(step_, 0), a.get(), 2, stream_);
+  // Summed per collection in element-list order, chunk by chunk (the CPU's order): the chunks on
+  // the device (ChunkPairSumBody, the host's additions in the host's order), only their sums
+  // copied back and added here in order.
+  std::size_t chunks = 0;
+  for (const auto& c : collections_) chunks += chunk_count(c.elements.size());
+  if (energy_chunk_sum_.size() != 2 * chunks) energy_chunk_sum_.allocate(2 * chunks);
+  std::size_t at = 0;
+  for (const auto& c : collections_) {
+    const std::size_t k = chunk_count(c.elements.size());
+    if (k)
+      forall(k, stream_,
+             ChunkPairSumBody{c.elements.get(), std::int32_t(c.elements.size()),
+                              element_energy_.get(), energy_chunk_sum_.get() + 2 * at});
+    at += k;
+  }
   SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
-  const auto en = element_energy_.download();
-  // Summed per collection in element-list order, chunk by chunk (the CPU's order).
+  const auto sums = energy_chunk_sum_.download();
   strain = hourglass = 0;
-  for (const auto& c : core_.plan().collections) {
-    for (std::size_t b = 0; b < c.elements.size(); b += kChunk) {
-      double s = 0, hg = 0;
-      for (std::size_t i = b; i < std::min(c.elements.size(), b + kChunk); ++i) {
-        s += en[2 * std::size_t(c.elements[i])];
-        hg += en[2 * std::size_t(c.elements[i]) + 1];
-      }
-      strain += s;
-      hourglass += hg;
-    }
+  for (std::size_t c = 0; c < chunks; ++c) {
+    strain += sums[2 * c];
+    hourglass += sums[2 * c + 1];
   }
 }
 
 template <typename T>
 Energies CudaEngine<T>::energies() {
+  return energies_at(download_vec(buffer(step_, 0)));
+}
+
+template <typename T>
+Energies CudaEngine<T>::energies_at(const std::vector<Vec3<T>>& u) {
   Energies e;
   e.step = step_;
   e.time = time();
   compute_energy_terms(e.strain, e.hourglass);
-  e.kinetic = kinetic_energy(download_vec(buffer(step_, 0)), download_vec(buffer(step_, 2)));
+  e.kinetic = kinetic_energy(u, download_pinned(buffer(step_, 2)));
   e.external_work = external_work();
   return e;
 }
@@ -96,14 +108,30 @@ void CudaEngine<T>::check_blowup(double work) {
 }
 
 template <typename T>
-std::vector<double> CudaEngine<T>::displacements() const {
+std::vector<Vec3<T>> CudaEngine<T>::download_pinned(const Vec3<T>* from) const {
   // Frames leave on the copy stream into pinned memory, after the step work queued so far.
   SINEW_CUDA_CHECK(cudaEventRecord(copy_ready_, stream_));
   SINEW_CUDA_CHECK(cudaStreamWaitEvent(copy_stream_, copy_ready_, 0));
-  SINEW_CUDA_CHECK(cudaMemcpyAsync(output_.get(), buffer(step_, 0), n_ * sizeof(Vec3<T>),
+  SINEW_CUDA_CHECK(cudaMemcpyAsync(output_.get(), from, n_ * sizeof(Vec3<T>),
                                    cudaMemcpyDeviceToHost, copy_stream_));
   SINEW_CUDA_CHECK(cudaStreamSynchronize(copy_stream_));
-  return flatten(output_.get(), n_);
+  return std::vector<Vec3<T>>(output_.get(), output_.get() + n_);
+}
+
+template <typename T>
+std::vector<double> CudaEngine<T>::displacements() const {
+  const auto u = download_pinned(buffer(step_, 0));
+  return flatten(u.data(), n_);
+}
+
+template <typename T>
+Frame CudaEngine<T>::frame(bool with_fields) {
+  std::vector<Vec3<T>> u = download_pinned(buffer(step_, 0));
+  Frame f{step_, time(), flatten(u.data(), n_), energies_at(u), {}};
+  // The fields are computed by whoever calls f.fields (the runner's frame thread), from this
+  // copy, with the same loop body as the CPU's: the GPU steps on meanwhile.
+  if (with_fields) f.fields = core_.deferred_element_fields(arrays_, std::move(u), step_, 0);
+  return f;
 }
 
 template <typename T>
