@@ -2,7 +2,7 @@
 // computes and steers it (muscle sliders, pause/resume/step/reset, click-drag forces, recording).
 // docs/live.md.
 //
-//   sinew-live SCENE [--device auto|cpu|cuda] [--port P] [--host H] [--record DIR] [--explain]
+//   sinew-live [SCENE] [--play RESULTS.h5] [--device auto|cpu|cuda] [--port P] [--host H] [--record DIR] [--explain]
 //              [--precision float|double] [--threads N] [--paused] [--frame-rate F] [--speed S]
 //              [--surface NAME] [--token T] [--web DIR] [--three DIR] [-q] [-v]
 //
@@ -18,6 +18,7 @@
 #include "sinew/common/log.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
+#include "sinew/live/playback.hpp"
 #include "sinew/live/server.hpp"
 #include "sinew/live/session.hpp"
 #include "sinew/simulator/run_setup.hpp"
@@ -32,8 +33,13 @@ int main(int argc, char** argv) {
   live::ServerOptions server;
   std::string precision, web = SINEW_LIVE_WEB_DIR, three = SINEW_LIVE_THREE_DIR;
   bool verbose = false;
-  app.add_option("scene", opt.scene_path, "Scene file (YAML, docs/scene-format.md)")
-      ->required()
+  auto* scene_opt =
+      app.add_option("scene", opt.scene_path, "Scene file (YAML, docs/scene-format.md)")
+          ->check(CLI::ExistingFile);
+  app.add_option("--play", so.play,
+                 "Scrub through this results file first; 'continue' replays its scene to the "
+                 "shown frame and goes on live (scene: SCENE, else scene.yaml beside the file, "
+                 "else the file's scene_file)")
       ->check(CLI::ExistingFile);
   app.add_option("--device", opt.device, "Backend: cpu, cuda or auto")
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
@@ -77,13 +83,17 @@ int main(int argc, char** argv) {
   }
 
   return tool::run("sinew-live", [&] {
+    if (!so.play.empty() && scene_opt->count() == 0)
+      opt.scene_path = live::RecordedRun(so.play).scene();
+    if (opt.scene_path.empty()) throw ConfigError("", "scene", "give a scene (or --play RESULTS.h5)");
     if (!std::filesystem::is_regular_file(std::filesystem::path(web) / "index.html"))
       throw IoError(web, "", "the page's folder has no index.html (--web)");
     if (!std::filesystem::is_regular_file(std::filesystem::path(three) / "build/three.module.js"))
       throw IoError(three, "",
                     "three.js is not installed there: run scripts/install-deps (--three)");
     // The live run plans as sinew-simulate does, with its steering (make_live_setup).
-    auto run = simulator::load_run(opt, live::make_live_setup);
+    auto run = simulator::load_run(opt, so.play.empty() ? live::make_live_setup
+                                                        : live::make_playback_setup);
     if (opt.explain) std::fputs(simulator::explain_run(run, "(live)").c_str(), stdout);
     if (!live::is_loopback_host(server.host) && server.token.empty())
       server.token = live::make_token();

@@ -150,6 +150,7 @@ function showStatus(s) {
       `t = ${s.time.toFixed(5)} s  step ${s.step}  ${s.paused ? (s.at_end ? 'end of scene (paused)' : 'paused') : 'running'}` +
       `  ${Math.round(s.steps_per_second)} steps/s  ${s.sim_seconds_per_wall_second.toPrecision(3)} sim s / wall s` +
       `  ${live.fps.toFixed(1)} frames/s` + (hello && hello.warnings.length ? `  warnings: ${hello.warnings.join('; ')}` : '');
+  if (!s.playback) $('playback').hidden = true;
   $('recording').textContent = s.recording ? ` recording to ${s.recording}` : '';
   $('record').textContent = s.recording ? 'Stop recording' : 'Record';
   $('message').textContent = s.error ? `engine: ${s.error}\n(reset, or lower activations and resume)` : '';
@@ -167,6 +168,11 @@ ws.addEventListener('message', (ev) => {
     hello = m;
     $('title').textContent = m.title || m.scene;
     m.muscles.forEach(muscleRow);
+    if (m.playback) {
+      $('playback').hidden = false;
+      $('frame').max = m.playback.times.length - 1;
+      $('frame_time').textContent = `t = ${m.playback.times[0].toFixed(4)} s`;
+    }
     $('radius').value = (m.drag_radius * 1e3).toFixed(1);
     $('radius_value').textContent = ` ${$('radius').value}`;
   } else if (m.type === 'role') {
@@ -187,6 +193,11 @@ $('step').onclick = () => send({ type: 'step', count: 1 });
 $('reset').onclick = () => send({ type: 'reset' });
 $('record').onclick = () => send({ type: 'record', on: !(live.status && live.status.recording) });
 $('field').onchange = () => send({ type: 'field', field: $('field').value });
+$('frame').addEventListener('input', () => {
+  $('frame_time').textContent = `t = ${hello.playback.times[Number($('frame').value)].toFixed(4)} s`;
+  send({ type: 'seek', frame: Number($('frame').value) });
+});
+$('continue').onclick = () => send({ type: 'continue' });
 for (const id of ['radius', 'stiffness'])
   $(id).addEventListener('input', () => { $(`${id}_value`).textContent = ` ${$(id).value}`; });
 $('stiffness_value').textContent = ` ${$('stiffness').value}`;

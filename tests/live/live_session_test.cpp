@@ -243,6 +243,91 @@ TEST_P(LiveSession, InstabilityPausesWithTheEnginesMessageAndResetRecovers) {
   session.stop();
 }
 
+TEST_P(LiveSession, OverridesStayWithinTheActivationTheTimeStepWasPlannedFor) {
+  TempDir dir("live_cap");
+  testing::write_live_case(dir.str());
+  simulator::RunOptions o;
+  o.scene_path = dir / "live_box.yaml";
+  o.device = GetParam();
+  // The scene's curve peaks at 0.3: a run planned as the scene (playback) takes overrides up to
+  // that; a live run is planned for 1 (a smaller Δt).
+  auto played = simulator::load_run(o, make_playback_setup);
+  EXPECT_NO_THROW(played.backend->set_activation_override(0, 0.3));
+  EXPECT_THROW(played.backend->set_activation_override(0, 0.31), ConfigError);
+  auto live = simulator::load_run(o, make_live_setup);
+  EXPECT_NO_THROW(live.backend->set_activation_override(0, 1.0));
+  EXPECT_LT(live.backend->dt(), played.backend->dt());
+}
+
+// The skin displacement floats of the session's latest frame.
+std::vector<float> frame_floats(const Session& s) {
+  const auto f = s.latest_frame();
+  std::vector<float> d((f->size() - kFrameHeaderBytes) / 4);
+  std::memcpy(d.data(), f->data() + kFrameHeaderBytes, d.size() * 4);
+  return d;
+}
+
+TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
+  TempDir dir("live_play");
+  testing::write_live_case(dir.str());
+  const auto scene = dir / "live_box.yaml";
+  // A batch run to play back.
+  auto ro = simulator::testing::options_for(scene, dir / "batch");
+  ro.device = GetParam();
+  simulator::run_scene(ro);
+  const std::string results = dir / "batch/results.h5";
+  const RecordedRun recorded(results);
+  ASSERT_GT(recorded.frame_count(), 10u);
+  EXPECT_EQ(recorded.scene(), scene);
+
+  simulator::RunOptions o;
+  o.scene_path = scene;
+  o.device = GetParam();
+  SessionOptions so;
+  so.play = results;
+  Session session(simulator::load_run(o, make_playback_setup), so);
+  session.start();
+  const auto seek = [&](std::int64_t k) {
+    Command c;
+    c.kind = Command::Kind::seek;
+    c.count = k;
+    session.submit(c);
+    ASSERT_TRUE(session.wait_idle(10));
+  };
+  Command step1;
+  step1.kind = Command::Kind::step;
+  EXPECT_THROW(session.submit(step1), ProtocolError);  // not while playing back
+  seek(9999);  // out of range: an error reply, nothing shown changes
+  const std::size_t k = 7;
+  seek(std::int64_t(k));
+  const auto shown = frame_floats(session);
+  std::uint32_t h[4];
+  double st[2];
+  std::memcpy(h, session.latest_frame()->data(), 16);
+  std::memcpy(st, session.latest_frame()->data() + 16, 16);
+  EXPECT_EQ(std::int64_t(st[0]), recorded.steps()[k]);
+  EXPECT_EQ(st[1], recorded.times()[k]);
+
+  // Continue: the scene is replayed to the frame's step; the engine's frame there is the file's.
+  Command go;
+  go.kind = Command::Kind::resume_from;
+  session.submit(go);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (session.step_index() < recorded.steps()[k] &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  ASSERT_TRUE(session.wait_idle(10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the frame after the last chunk
+  EXPECT_EQ(session.step_index(), recorded.steps()[k]);
+  EXPECT_TRUE(session.paused());
+  EXPECT_EQ(frame_floats(session), shown);
+  step(session, 10);  // live from there
+  Command seek_now;
+  seek_now.kind = Command::Kind::seek;
+  EXPECT_THROW(session.submit(seek_now), ProtocolError);  // playback is over
+  session.stop();
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, LiveSession, ::testing::Values("cpu", "cuda"),
                          [](const auto& info) { return info.param; });
 

@@ -135,6 +135,16 @@ Command parse_command(std::string_view text) {
       throw ProtocolError("'on' must be true or false");
     c.kind = Command::Kind::record;
     c.on = m.at("on").get<bool>();
+  } else if (type == "seek") {
+    allow(m, {"frame"});
+    c.kind = Command::Kind::seek;
+    if (!m.contains("frame") || !m.at("frame").is_number_integer() ||
+        m.at("frame").get<std::int64_t>() < 0)
+      throw ProtocolError("'frame' must be a frame index (an integer >= 0)");
+    c.count = m.at("frame").get<std::int64_t>();
+  } else if (type == "continue") {
+    allow(m, {});
+    c.kind = Command::Kind::resume_from;
   } else if (type == "field") {
     allow(m, {"field"});
     c.kind = Command::Kind::field;
@@ -152,7 +162,7 @@ Command parse_command(std::string_view text) {
   } else {
     throw ProtocolError(fmt::format(
         "unknown message type '{}' (expected activation, pause, resume, step, reset, drag, "
-        "release, record or field)",
+        "release, record, field, seek or continue)",
         type.substr(0, 64)));
   }
   return c;

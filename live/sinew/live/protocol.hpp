@@ -32,7 +32,9 @@ enum class Field : std::uint32_t { displacement = 0, von_mises = 1, jacobian = 2
 const char* field_name(Field f);
 
 struct Command {
-  enum class Kind { activation, pause, resume, step, reset, drag, release, record, field };
+  enum class Kind {
+    activation, pause, resume, step, reset, drag, release, record, field, seek, resume_from
+  };
   Kind kind = Kind::pause;
   std::uint32_t id = 0;               // the client's id for it (0: none)
   std::string muscle;                 // activation

@@ -70,6 +70,10 @@ void make_live_setup(simulator::Setup& setup) {
   setup.force_slots = setup.effects.loads ? 1 : 0;
 }
 
+void make_playback_setup(simulator::Setup& setup) {
+  setup.force_slots = setup.effects.loads ? 1 : 0;
+}
+
 Session::Session(simulator::LoadedRun run, SessionOptions options)
     : run_(std::move(run)), options_(std::move(options)) {
   surface_ = make_surface_view(run_.model, options_.surface);
@@ -78,6 +82,19 @@ Session::Session(simulator::LoadedRun run, SessionOptions options)
   initial_ = run_.backend->state();
   step_ = run_.backend->step_index();
   paused_ = options_.start_paused;
+  if (!options_.play.empty()) {
+    playback_ = std::make_unique<RecordedRun>(options_.play);
+    if (playback_->nodes() != run_.model.node_count())
+      throw FormatError(options_.play, "/frames/displacement",
+                        fmt::format("{} nodes, but the scene's model has {}", playback_->nodes(),
+                                    run_.model.node_count()));
+    playback_hello_ = json({{"file", playback_->path()},
+                            {"times", playback_->times()},
+                            {"steps", playback_->steps()}})
+                          .dump();
+    playing_ = true;
+    paused_ = true;
+  }
   if (!options_.record_dir.empty()) start_recording(options_.record_dir);
 }
 
@@ -109,6 +126,12 @@ void Session::submit(const Command& c) {
     if (std::find(muscle_names_.begin(), muscle_names_.end(), c.muscle) == muscle_names_.end())
       throw ProtocolError(fmt::format("unknown muscle '{}'", c.muscle.substr(0, 64)));
   }
+  const bool playback_command =
+      c.kind == Command::Kind::seek || c.kind == Command::Kind::resume_from;
+  if (playing_ && !playback_command && c.kind != Command::Kind::field)
+    throw ProtocolError("playing back a results file: continue from a frame first");
+  if (!playing_ && playback_command)
+    throw ProtocolError("not playing back a results file (sinew-live --play RESULTS.h5)");
   if (c.kind == Command::Kind::drag && run_.backend->force_slot_count() == 0)
     throw ProtocolError(run_.resolved.setup.effects.loads
                             ? "drag forces are not available on this backend (use --device cpu)"
@@ -168,6 +191,7 @@ std::string Session::hello_json() const {
             {"drag_radius", options_.drag_radius_default > 0 ? options_.drag_radius_default
                                                              : 3 * run_.model.grid.voxel_size},
             {"warnings", run_.summary.warnings}};
+  if (playing_) j["playback"] = json::parse(playback_hello_);
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
@@ -281,6 +305,21 @@ void Session::apply(const Command& c) {
     case Command::Kind::field:
       field_ = c.field;
       break;
+    case Command::Kind::seek:
+      seek(std::size_t(c.count));
+      break;
+    case Command::Kind::resume_from: {
+      // Replay the scene from step 0 to the shown frame (exact: playback.hpp), then go on live.
+      const std::int64_t target = playback_->steps()[shown_frame_];
+      backend.restore(initial_);
+      pending_steps_ = target;
+      paused_ = true;
+      playing_ = false;
+      playback_.reset();
+      log_.clear();
+      log_.events.emplace_back(0, fmt::format("continue from step {} (replayed)", target));
+      break;
+    }
   }
   if (c.id) last_id_ = c.id;
   changed_ = true;
@@ -340,7 +379,23 @@ void Session::finish_recording() {
 
 void Session::publish_frame() {
   auto& backend = *run_.backend;
-  const auto sub = backend.displacements(surface_.nodes);
+  publish_surface(backend.displacements(surface_.nodes), backend.step_index(),
+                  backend.time() / run_.resolved.setup.time_scaling);
+}
+
+void Session::seek(std::size_t frame) {
+  const auto u = playback_->displacement(frame);
+  std::vector<double> sub;
+  sub.reserve(3 * surface_.nodes.size());
+  for (auto n : surface_.nodes)
+    for (std::size_t k = 0; k < 3; ++k) sub.push_back(u[3 * std::size_t(n) + k]);
+  shown_frame_ = frame;
+  field_ = Field::displacement;  // the file's element fields are not streamed in playback
+  publish_surface(sub, playback_->steps()[frame], playback_->times()[frame]);
+}
+
+void Session::publish_surface(const std::vector<double>& sub, std::int64_t step, double time) {
+  auto& backend = *run_.backend;
   const std::size_t nv = surface_.weights.size();
   std::vector<float> disp(nv * 3), values(nv);
   simulator::ElementFields fields;
@@ -351,15 +406,12 @@ void Session::publish_frame() {
       for (std::size_t k = 0; k < 3; ++k) d[k] += w * sub[3 * slot + k];
     for (std::size_t k = 0; k < 3; ++k) disp[3 * v + k] = float(d[k]);
     const auto e = std::size_t(surface_.element[v]);
-    values[v] = field_ == Field::von_mises ? float(fields.von_mises[e])
-                : field_ == Field::jacobian
-                    ? float(fields.jacobian[e])
-                    : float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    values[v] = field_ == Field::von_mises  ? float(fields.von_mises[e])
+                : field_ == Field::jacobian ? float(fields.jacobian[e])
+                                            : float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
   }
-  auto frame = std::make_shared<const std::string>(
-      encode_frame(backend.step_index(), backend.time() / run_.resolved.setup.time_scaling, field_,
-                   last_id_, disp, values));
-  publish(frame, true, latest_frame_);
+  publish(std::make_shared<const std::string>(encode_frame(step, time, field_, last_id_, disp, values)),
+          true, latest_frame_);
 }
 
 void Session::publish(std::shared_ptr<const std::string> msg, bool binary,
@@ -398,7 +450,10 @@ void Session::publish_status() {
             {"field", field_name(field_)},
             {"overrides", overrides},
             {"last_id", last_id_},
-            {"error", error.empty() ? json(nullptr) : json(error)}};
+            {"error", error.empty() ? json(nullptr) : json(error)},
+            {"playback", playing_ ? json({{"frame", shown_frame_},
+                                          {"frames", playback_->frame_count()}})
+                                  : json(nullptr)}};
   auto msg =
       std::make_shared<const std::string>(j.dump(-1, ' ', false, json::error_handler_t::replace));
   publish(std::move(msg), false, latest_status_);
@@ -416,7 +471,10 @@ void Session::loop() {
   std::int64_t rate_steps = 0;
   double rate_wall = 0;
   chunk_ = 1;
-  publish_frame();
+  if (playing_)
+    seek(0);
+  else
+    publish_frame();
   publish_status();
   while (!stop_) {
     std::vector<Command> commands;
@@ -434,6 +492,7 @@ void Session::loop() {
         if (sink_) sink_(std::make_shared<const std::string>(error_message(e.what(), c.id)), false);
       }
     }
+    step_ = backend.step_index();  // reset and continue move it too
     {
       std::lock_guard lock(mutex_);
       applied_ = taken;
@@ -478,6 +537,7 @@ void Session::loop() {
       const double wall = seconds_since(t0);
       const std::int64_t done = backend.step_index() - n;
       pending_steps_ = std::max<std::int64_t>(0, pending_steps_ - done);
+      if (pending_steps_ == 0 && paused_) changed_ = true;  // show where stepping stopped
       step_ = backend.step_index();
       rate_steps += done;
       rate_wall += wall;

@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "sinew/live/playback.hpp"
 #include "sinew/live/protocol.hpp"
 #include "sinew/live/steering_log.hpp"
 #include "sinew/simulator/output_schedule.hpp"
@@ -36,6 +37,9 @@ namespace sinew::live {
 // simulates muscles (its Δt then assumes activation 1) and one force slot for drags when it
 // simulates loads. Pass to simulator::load_run.
 void make_live_setup(simulator::Setup& setup);
+// The same for playback (--play): the force slot only, so the replay runs the saved run's own plan
+// (its Δt) and sliders go up to each curve's peak.
+void make_playback_setup(simulator::Setup& setup);
 
 struct SessionOptions {
   double frame_rate = 30;        // frames per second streamed (at most)
@@ -46,6 +50,7 @@ struct SessionOptions {
   bool pause_at_end = true;        // pause once when the scene's duration is reached
   std::string surface;             // visual surface to stream ("" the first visual one)
   double drag_radius_default = 0;  // m (0: 3 voxels)
+  std::string play;                // a results file to scrub through first (playback.hpp)
 };
 
 // What the page needs to draw the model: the streamed surface at rest.
@@ -94,6 +99,9 @@ class Session {
   void loop();
   void apply(const Command& c);
   void publish_frame();
+  // Frame from the displacements of surface_.nodes (3 per node, m).
+  void publish_surface(const std::vector<double>& sub, std::int64_t step, double time);
+  void seek(std::size_t frame);
   void publish_status();
   // Keeps msg as the latest of its kind (for new clients) and hands it to the sink.
   void publish(std::shared_ptr<const std::string> msg, bool binary,
@@ -134,6 +142,11 @@ class Session {
   std::string record_dir_;
   std::int64_t next_record_ = 0, last_recorded_ = -1;
   std::optional<simulator::OutputSchedule> schedule_;
+  // Playback: frames from a results file until "continue" replays the scene to the shown frame.
+  std::unique_ptr<RecordedRun> playback_;
+  std::atomic<bool> playing_{false};
+  std::size_t shown_frame_ = 0;
+  std::string playback_hello_;  // the frames' times and steps for "hello" (fixed at start)
 };
 
 }  // namespace sinew::live

@@ -249,15 +249,19 @@ void BackendCore::activations(double t, T* out) const {
 }
 
 void BackendCore::set_activation_override(std::size_t m, std::optional<double> a) {
-  if (!setup_.activation_overrides)
-    throw ConfigError("", "activation",
-                      "this run was not planned for activation overrides (a live run is)");
   if (m >= muscle_count())
     throw ConfigError(
         "", "activation",
         fmt::format("muscle {} out of range (the run simulates {})", m, muscle_count()));
   if (a && !std::isfinite(*a))
     throw ConfigError("", "activation", "the activation must be a finite number");
+  // The time step holds up to the activation it was planned for (Setup::max_activation).
+  if (a && *a > setup_.max_activation(m))
+    throw ConfigError("", "activation",
+                      fmt::format("{:.4g} is above {:.4g}, the activation this run's time step was "
+                                  "planned for (a live run plans for 1; a played-back run keeps "
+                                  "its own plan)",
+                                  *a, setup_.max_activation(m)));
   activation_override_.resize(muscle_count());
   // Clamped as the curves are; + 0.0 turns −0 into +0 (the curve of a reproduced scene gives +0).
   activation_override_[m] =

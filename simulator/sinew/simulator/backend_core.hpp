@@ -131,7 +131,8 @@ class BackendCore {
   // engines see them from their next step() call. The plan is never rebuilt.
   // Activation override of muscle m (model order): a ∈ [0, 1] replaces the curve's value from the
   // next step; nullopt returns to the curve. Throws ConfigError for m out of range, a not finite,
-  // or a run without Setup::activation_overrides (its time step assumed the curves' peaks).
+  // or a above Setup::max_activation(m) (the time step was planned for that; a live run sets
+  // Setup::activation_overrides, which makes it 1).
   void set_activation_override(std::size_t m, std::optional<double> a);
   std::optional<double> activation_override(std::size_t m) const;
   // Live force slots (Setup::force_slots): force sets after the scene's. set_force_slot gives slot
