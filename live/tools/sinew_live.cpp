@@ -85,15 +85,16 @@ int main(int argc, char** argv) {
   return tool::run("sinew-live", [&] {
     if (!so.play.empty() && scene_opt->count() == 0)
       opt.scene_path = live::RecordedRun(so.play).scene();
-    if (opt.scene_path.empty()) throw ConfigError("", "scene", "give a scene (or --play RESULTS.h5)");
+    if (opt.scene_path.empty())
+      throw ConfigError("", "scene", "give a scene (or --play RESULTS.h5)");
     if (!std::filesystem::is_regular_file(std::filesystem::path(web) / "index.html"))
       throw IoError(web, "", "the page's folder has no index.html (--web)");
     if (!std::filesystem::is_regular_file(std::filesystem::path(three) / "build/three.module.js"))
       throw IoError(three, "",
                     "three.js is not installed there: run scripts/install-deps (--three)");
     // The live run plans as sinew-simulate does, with its steering (make_live_setup).
-    auto run = simulator::load_run(opt, so.play.empty() ? live::make_live_setup
-                                                        : live::make_playback_setup);
+    auto run = simulator::load_run(
+        opt, so.play.empty() ? live::make_live_setup : live::make_playback_setup);
     if (opt.explain) std::fputs(simulator::explain_run(run, "(live)").c_str(), stdout);
     if (!live::is_loopback_host(server.host) && server.token.empty())
       server.token = live::make_token();

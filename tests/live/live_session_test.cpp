@@ -14,6 +14,7 @@
 #include "../simulator/sim_io_support.hpp"
 #include "live_support.hpp"
 #include "results_compare.hpp"
+#include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/live/session.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
@@ -253,7 +254,7 @@ TEST_P(LiveSession, OverridesStayWithinTheActivationTheTimeStepWasPlannedFor) {
   // that; a live run is planned for 1 (a smaller Δt).
   auto played = simulator::load_run(o, make_playback_setup);
   EXPECT_NO_THROW(played.backend->set_activation_override(0, 0.3));
-  EXPECT_THROW(played.backend->set_activation_override(0, 0.31), ConfigError);
+  EXPECT_THROW(played.backend->set_activation_override(0, 0.31), sinew::ConfigError);
   auto live = simulator::load_run(o, make_live_setup);
   EXPECT_NO_THROW(live.backend->set_activation_override(0, 1.0));
   EXPECT_LT(live.backend->dt(), played.backend->dt());

@@ -16,18 +16,21 @@ namespace h5 = formats::hdf5;
 
 RecordedRun::RecordedRun(std::string path) : path_(std::move(path)) {
   const auto f = h5::open_checked(path_);
-  if (!h5::has_attribute(f, "format") || h5::string_attribute(f, "format", path_) != formats::kResultsFormatName)
+  if (!h5::has_attribute(f, "format") ||
+      h5::string_attribute(f, "format", path_) != formats::kResultsFormatName)
     throw FormatError(path_, "/", "not a sinew results file (attribute format)");
   times_ = h5::read<double>(f, "/frames/time", path_);
   const auto steps = h5::read<std::int64_t>(f, "/frames/step", path_);
-  steps_.assign(steps.begin(), steps.begin() + std::ptrdiff_t(std::min(steps.size(), times_.size())));
+  steps_.assign(steps.begin(),
+                steps.begin() + std::ptrdiff_t(std::min(steps.size(), times_.size())));
   times_.resize(steps_.size());
   const auto shape = h5::shape(f, "/frames/displacement", path_);
   if (shape.size() != 3 || shape[2] != 3 || shape[0] < steps_.size())
     throw FormatError(path_, "/frames/displacement", "expected a frames × N × 3 dataset");
   nodes_ = std::size_t(shape[1]);
   if (steps_.empty()) throw FormatError(path_, "/frames/step", "the file has no frame");
-  if (h5::has_attribute(f, "scene_file")) scene_attribute_ = h5::string_attribute(f, "scene_file", path_);
+  if (h5::has_attribute(f, "scene_file"))
+    scene_attribute_ = h5::string_attribute(f, "scene_file", path_);
 }
 
 std::vector<double> RecordedRun::displacement(std::size_t k) const {

@@ -33,7 +33,17 @@ const char* field_name(Field f);
 
 struct Command {
   enum class Kind {
-    activation, pause, resume, step, reset, drag, release, record, field, seek, resume_from
+    activation,
+    pause,
+    resume,
+    step,
+    reset,
+    drag,
+    release,
+    record,
+    field,
+    seek,
+    resume_from
   };
   Kind kind = Kind::pause;
   std::uint32_t id = 0;               // the client's id for it (0: none)

@@ -406,12 +406,14 @@ void Session::publish_surface(const std::vector<double>& sub, std::int64_t step,
       for (std::size_t k = 0; k < 3; ++k) d[k] += w * sub[3 * slot + k];
     for (std::size_t k = 0; k < 3; ++k) disp[3 * v + k] = float(d[k]);
     const auto e = std::size_t(surface_.element[v]);
-    values[v] = field_ == Field::von_mises  ? float(fields.von_mises[e])
-                : field_ == Field::jacobian ? float(fields.jacobian[e])
-                                            : float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    values[v] = field_ == Field::von_mises ? float(fields.von_mises[e])
+                : field_ == Field::jacobian
+                    ? float(fields.jacobian[e])
+                    : float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
   }
-  publish(std::make_shared<const std::string>(encode_frame(step, time, field_, last_id_, disp, values)),
-          true, latest_frame_);
+  publish(
+      std::make_shared<const std::string>(encode_frame(step, time, field_, last_id_, disp, values)),
+      true, latest_frame_);
 }
 
 void Session::publish(std::shared_ptr<const std::string> msg, bool binary,
@@ -438,22 +440,22 @@ void Session::publish_status() {
     std::lock_guard lock(mutex_);
     error = error_;
   }
-  json j = {{"type", "status"},
-            {"step", backend.step_index()},
-            {"time", backend.time() / run_.resolved.setup.time_scaling},
-            {"paused", paused_.load()},
-            {"at_end", at_end_},
-            {"steps_per_second", steps_per_second_},
-            {"sim_seconds_per_wall_second", sim_per_wall_},
-            {"recording", writer_ ? json(record_dir_) : json(nullptr)},
-            {"dragging", dragging_},
-            {"field", field_name(field_)},
-            {"overrides", overrides},
-            {"last_id", last_id_},
-            {"error", error.empty() ? json(nullptr) : json(error)},
-            {"playback", playing_ ? json({{"frame", shown_frame_},
-                                          {"frames", playback_->frame_count()}})
-                                  : json(nullptr)}};
+  json j = {
+      {"type", "status"},
+      {"step", backend.step_index()},
+      {"time", backend.time() / run_.resolved.setup.time_scaling},
+      {"paused", paused_.load()},
+      {"at_end", at_end_},
+      {"steps_per_second", steps_per_second_},
+      {"sim_seconds_per_wall_second", sim_per_wall_},
+      {"recording", writer_ ? json(record_dir_) : json(nullptr)},
+      {"dragging", dragging_},
+      {"field", field_name(field_)},
+      {"overrides", overrides},
+      {"last_id", last_id_},
+      {"error", error.empty() ? json(nullptr) : json(error)},
+      {"playback", playing_ ? json({{"frame", shown_frame_}, {"frames", playback_->frame_count()}})
+                            : json(nullptr)}};
   auto msg =
       std::make_shared<const std::string>(j.dump(-1, ' ', false, json::error_handler_t::replace));
   publish(std::move(msg), false, latest_status_);

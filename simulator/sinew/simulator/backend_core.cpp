@@ -552,8 +552,7 @@ ElementFields BackendCore::fields_at(const EngineArrays<T>& a, const Vec3<T>* u,
         constexpr bool kElastic = decltype(elastic)::value, kMuscle = decltype(muscles)::value;
         for_each_chunk<T>(e_count, threads, [&](std::size_t, std::size_t begin, std::size_t end) {
           for (std::size_t e = begin; e < end; ++e) {
-            const ElementStart<T> s =
-                element_start<T, kMuscle>(d, std::int32_t(e), activation);
+            const ElementStart<T> s = element_start<T, kMuscle>(d, std::int32_t(e), activation);
             Vec3<T> ue[8];
             for (int c = 0; c < 8; ++c) ue[c] = u[s.ids[c]];
             T j;

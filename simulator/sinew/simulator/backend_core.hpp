@@ -196,8 +196,8 @@ class BackendCore {
   // activations of `step` read now (Frame::fields); `a` and this core must outlive it.
   template <typename T>
   std::function<ElementFields()> deferred_element_fields(const EngineArrays<T>& a,
-                                                         std::vector<Vec3<T>> u,
-                                                         std::int64_t step, int threads) const;
+                                                         std::vector<Vec3<T>> u, std::int64_t step,
+                                                         int threads) const;
 
  private:
   // element_fields with the activations given (muscle_count() values).
