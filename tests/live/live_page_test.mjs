@@ -80,7 +80,7 @@ try {
     let m = 0; for (let i = 0; i < r.length / 3; ++i) if (r[3*i] > 0.0239) m = Math.min(m, d[3*i]); return m; })()`;
   const before = await live(freeEndDx);
   await page.$eval('#muscles input', (s) => { s.value = '1'; s.dispatchEvent(new Event('input')); });
-  await sleep(1500);
+  await waitFor(`${freeEndDx} < ${before - 2e-4}`, 'the slider to contract the muscle');
   const after = await live(freeEndDx);
   check(after < before - 2e-4, `the slider contracts the muscle (free end x: ${before} -> ${after} m)`);
 
@@ -97,7 +97,7 @@ try {
   await page.mouse.move(x, y);
   await page.mouse.down();
   for (let k = 1; k <= 10; ++k) { await page.mouse.move(x, y - 12 * k); await sleep(60); }
-  await sleep(1200);
+  await waitFor(`${topZ} > ${z0 + 2e-4}`, 'the drag to lift the picked region');
   const z1 = await live(topZ);
   await page.mouse.up();
   check(z1 > z0 + 2e-4, `dragging lifts the picked region (top z: ${z0} -> ${z1} m)`);

@@ -49,6 +49,15 @@ void step(Session& s, std::int64_t n) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   ASSERT_EQ(s.step_index(), target);
   ASSERT_TRUE(s.wait_idle(10));
+  // And the frame published where stepping stopped.
+  const auto frame_step = [&] {
+    double sd[2];
+    std::memcpy(sd, s.latest_frame()->data() + 16, 16);
+    return std::int64_t(sd[0]);
+  };
+  while (frame_step() != target && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_EQ(frame_step(), target);
 }
 
 void activate(Session& s, std::optional<double> a) {
@@ -318,7 +327,15 @@ TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
          std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   ASSERT_TRUE(session.wait_idle(10));
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the frame after the last chunk
+  // The frame published where the replay stopped.
+  const auto frame_step = [&] {
+    double sd[2];
+    std::memcpy(sd, session.latest_frame()->data() + 16, 16);
+    return std::int64_t(sd[0]);
+  };
+  while (frame_step() != recorded.steps()[k] &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
   EXPECT_EQ(session.step_index(), recorded.steps()[k]);
   EXPECT_TRUE(session.paused());
   EXPECT_EQ(frame_floats(session), shown);

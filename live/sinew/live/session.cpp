@@ -378,6 +378,7 @@ void Session::finish_recording() {
 }
 
 void Session::publish_frame() {
+  if (playing_) return;  // playback shows the file's frames (seek), not the engine's
   auto& backend = *run_.backend;
   publish_surface(backend.displacements(surface_.nodes), backend.step_index(),
                   backend.time() / run_.resolved.setup.time_scaling);
