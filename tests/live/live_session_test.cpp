@@ -68,6 +68,24 @@ void activate(Session& s, std::optional<double> a) {
   s.submit(c);
 }
 
+// Writes the test case into dir and returns the options of a quiet run of its scene.
+simulator::RunOptions case_options(const TempDir& dir, const std::string& device) {
+  testing::write_live_case(dir.str());
+  simulator::RunOptions o;
+  o.scene_path = dir / "live_box.yaml";
+  o.device = device;
+  o.quiet = true;
+  return o;
+}
+
+// The skin displacement floats of the session's latest frame.
+std::vector<float> frame_floats(const Session& s) {
+  const auto f = s.latest_frame();
+  std::vector<float> d((f->size() - kFrameHeaderBytes) / 4);
+  std::memcpy(d.data(), f->data() + kFrameHeaderBytes, d.size() * 4);
+  return d;
+}
+
 TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
   const bool cuda = GetParam() == "cuda";
   TempDir dir("live_session");
@@ -155,10 +173,7 @@ TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
 TEST_P(LiveSession, SliderAndDragMoveTheSkin) {
   if (GetParam() == "cuda") GTEST_SKIP() << "drag forces are CPU-only (docs/live.md)";
   TempDir dir("live_steer");
-  testing::write_live_case(dir.str());
-  simulator::RunOptions o;
-  o.scene_path = dir / "live_box.yaml";
-  o.device = GetParam();
+  const auto o = case_options(dir, GetParam());
   auto run = simulator::load_run(o, make_live_setup);
   SessionOptions so;
   so.start_paused = true;
@@ -166,20 +181,12 @@ TEST_P(LiveSession, SliderAndDragMoveTheSkin) {
   session.start();
   // The free end (x = 24 mm) moves towards the clamp when the muscle contracts. Frames carry the
   // skin's displacement; read the latest frame after each phase.
-  const auto frame_disp = [&] {
-    const auto f = session.latest_frame();
-    std::uint32_t h[4];
-    std::memcpy(h, f->data(), 16);
-    std::vector<float> d(3 * h[1]);
-    std::memcpy(d.data(), f->data() + kFrameHeaderBytes, d.size() * 4);
-    return d;
-  };
   activate(session, 0.0);
   step(session, 400);
-  const auto rest = frame_disp();
+  const auto rest = frame_floats(session);
   activate(session, 1.0);
   step(session, 400);
-  const auto contracted = frame_disp();
+  const auto contracted = frame_floats(session);
   double min_dx = 0;
   for (std::size_t v = 0; v < contracted.size() / 3; ++v)
     min_dx = std::min(min_dx, double(contracted[3 * v] - rest[3 * v]));
@@ -191,7 +198,7 @@ TEST_P(LiveSession, SliderAndDragMoveTheSkin) {
   drag.radius = 0.003;
   session.submit(drag);
   step(session, 400);
-  const auto dragged = frame_disp();
+  const auto dragged = frame_floats(session);
   double max_dz = 0;
   for (std::size_t v = 0; v < dragged.size() / 3; ++v)
     max_dz = std::max(max_dz, double(dragged[3 * v + 2] - contracted[3 * v + 2]));
@@ -202,10 +209,7 @@ TEST_P(LiveSession, SliderAndDragMoveTheSkin) {
 TEST_P(LiveSession, InstabilityPausesWithTheEnginesMessageAndResetRecovers) {
   if (GetParam() == "cuda") GTEST_SKIP() << "drag forces are CPU-only (docs/live.md)";
   TempDir dir("live_unstable");
-  testing::write_live_case(dir.str());
-  simulator::RunOptions o;
-  o.scene_path = dir / "live_box.yaml";
-  o.device = GetParam();
+  const auto o = case_options(dir, GetParam());
   SessionOptions so;
   so.start_paused = true;
   Session session(simulator::load_run(o, make_live_setup), so);
@@ -255,10 +259,7 @@ TEST_P(LiveSession, InstabilityPausesWithTheEnginesMessageAndResetRecovers) {
 
 TEST_P(LiveSession, OverridesStayWithinTheActivationTheTimeStepWasPlannedFor) {
   TempDir dir("live_cap");
-  testing::write_live_case(dir.str());
-  simulator::RunOptions o;
-  o.scene_path = dir / "live_box.yaml";
-  o.device = GetParam();
+  const auto o = case_options(dir, GetParam());
   // The scene's curve peaks at 0.3: a run planned as the scene (playback) takes overrides up to
   // that; a live run is planned for 1 (a smaller Δt).
   auto played = simulator::load_run(o, make_playback_setup);
@@ -269,18 +270,10 @@ TEST_P(LiveSession, OverridesStayWithinTheActivationTheTimeStepWasPlannedFor) {
   EXPECT_LT(live.backend->dt(), played.backend->dt());
 }
 
-// The skin displacement floats of the session's latest frame.
-std::vector<float> frame_floats(const Session& s) {
-  const auto f = s.latest_frame();
-  std::vector<float> d((f->size() - kFrameHeaderBytes) / 4);
-  std::memcpy(d.data(), f->data() + kFrameHeaderBytes, d.size() * 4);
-  return d;
-}
-
 TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
   TempDir dir("live_play");
-  testing::write_live_case(dir.str());
-  const auto scene = dir / "live_box.yaml";
+  const auto o = case_options(dir, GetParam());
+  const auto scene = o.scene_path;
   // A batch run to play back.
   auto ro = simulator::testing::options_for(scene, dir / "batch");
   ro.device = GetParam();
@@ -290,9 +283,6 @@ TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
   ASSERT_GT(recorded.frame_count(), 10u);
   EXPECT_EQ(recorded.scene(), scene);
 
-  simulator::RunOptions o;
-  o.scene_path = scene;
-  o.device = GetParam();
   SessionOptions so;
   so.play = results;
   Session session(simulator::load_run(o, make_playback_setup), so);
