@@ -472,7 +472,6 @@ void Session::loop() {
   auto pace_wall = Clock::now();
   std::int64_t pace_step = backend.step_index();
   std::int64_t rate_steps = 0;
-  double rate_wall = 0;
   chunk_ = 1;
   if (playing_)
     seek(0);
@@ -543,7 +542,6 @@ void Session::loop() {
       if (pending_steps_ == 0 && paused_) changed_ = true;  // show where stepping stopped
       step_ = backend.step_index();
       rate_steps += done;
-      rate_wall += wall;
       // Chunks of about chunk_seconds: commands wait at most that long for the step loop.
       if (wall < 0.5 * options_.chunk_seconds)
         chunk_ = std::min(chunk_ * 2, std::max<std::int64_t>(1, backend.preferred_step_count()));
@@ -556,7 +554,6 @@ void Session::loop() {
       sim_per_wall_ = steps_per_second_ * backend.dt() / run_.resolved.setup.time_scaling;
       rate_start = Clock::now();
       rate_steps = 0;
-      rate_wall = 0;
     }
     const bool frame_due = seconds_since(last_frame) >= frame_period;
     if (changed_ || (run && frame_due)) {
