@@ -42,6 +42,8 @@ std::int32_t to_i32(std::int64_t v, const char* what) {
 // The constraint program in the one order of loads and constraints: per node, nodal forces by set,
 // capture of u* (prescribed entries), sliding, planes in list order, prescribed sets in order,
 // rigid. Grouped by node (ascending ids: neighbouring sliding nodes share GPU warps).
+}  // namespace
+
 template <typename T>
 ConstraintArrays<T> make_constraint_program(const PreparedModel& p) {
   struct Entry {
@@ -95,6 +97,8 @@ ConstraintArrays<T> make_constraint_program(const PreparedModel& p) {
   for (std::size_t k = 0; k < p.nodes; ++k) c.node_op_offset[k + 1] += c.node_op_offset[k];
   return c;
 }
+
+namespace {
 
 template <typename T>
 SlidingSurfaceArrays<T> make_surface(const PreparedSurface& ps, double skin_cells) {
@@ -268,6 +272,7 @@ BackendCore::BackendCore(const formats::Model& model, const Setup& setup, Plan p
   prepared_ = prepare_model(model, setup, plan_);
   model_rigid_ = model.rigid_nodes;
   muscle_count_ = model.muscles.size();
+  force_slots_ = setup.effects.loads ? std::size_t(std::max(0, setup.force_slots)) : 0;
   const double eps = setup.precision == Precision::float32
                          ? double(std::numeric_limits<float>::epsilon())
                          : double(std::numeric_limits<double>::epsilon());
@@ -292,10 +297,65 @@ std::size_t BackendCore::step_scalar_count() const {
 
 template <typename T>
 void BackendCore::activations(double t, T* out) const {
-  for (std::size_t m = 0; m < muscle_count(); ++m)
+  for (std::size_t m = 0; m < muscle_count(); ++m) {
+    if (m < activation_override_.size() && activation_override_[m]) {
+      out[m] = T(*activation_override_[m]);
+      continue;
+    }
     out[m] = m < setup_.activation.size() && !setup_.activation[m].points.empty()
                  ? T(std::clamp(setup_.activation[m].at(curve_time(t)), 0.0, 1.0))
                  : T(0);
+  }
+}
+
+void BackendCore::set_activation_override(std::size_t m, std::optional<double> a) {
+  if (m >= muscle_count())
+    throw ConfigError(
+        "", "activation",
+        fmt::format("muscle {} out of range (the run simulates {})", m, muscle_count()));
+  if (a && !std::isfinite(*a))
+    throw ConfigError("", "activation", "the activation must be a finite number");
+  // The time step holds up to the activation it was planned for (Setup::max_activation).
+  if (a && *a > setup_.max_activation(m))
+    throw ConfigError("", "activation",
+                      fmt::format("{:.4g} is above {:.4g}, the activation this run's time step was "
+                                  "planned for (a live run plans for 1; a played-back run keeps "
+                                  "its own plan)",
+                                  *a, setup_.max_activation(m)));
+  activation_override_.resize(muscle_count());
+  // Clamped as the curves are; + 0.0 turns −0 into +0 (the curve of a reproduced scene gives +0).
+  activation_override_[m] =
+      a ? std::optional<double>(std::clamp(*a, 0.0, 1.0) + 0.0) : std::nullopt;
+}
+
+std::optional<double> BackendCore::activation_override(std::size_t m) const {
+  return m < activation_override_.size() ? activation_override_[m] : std::nullopt;
+}
+
+void BackendCore::set_force_slot(std::size_t k, std::vector<Index> nodes,
+                                 const std::array<double, 3>& force) {
+  if (k >= force_slots_)
+    throw ConfigError("", "force slot",
+                      fmt::format("slot {} out of range (the run has {})", k, force_slots_));
+  check_node_ids(nodes, "force slot nodes");
+  for (double f : force)
+    if (!std::isfinite(f)) throw ConfigError("", "force", "the force must be finite");
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  auto& set = prepared_.forces[prepared_.forces.size() - force_slots_ + k];
+  set.nodes = std::move(nodes);
+  set.per_node = force;
+  set.curve = Curve::constant(1.0);
+}
+
+void BackendCore::clear_force_slot(std::size_t k) {
+  if (k >= force_slots_)
+    throw ConfigError("", "force slot",
+                      fmt::format("slot {} out of range (the run has {})", k, force_slots_));
+  auto& set = prepared_.forces[prepared_.forces.size() - force_slots_ + k];
+  set.nodes.clear();
+  set.per_node = {0, 0, 0};
+  set.curve = Curve::constant(0.0);
 }
 
 template <typename T>
@@ -606,6 +666,7 @@ ElementFields BackendCore::fields_at(const EngineArrays<T>& a, const Vec3<T>* u,
   template ConstraintData<T> host_constraint_data<T>(const EngineArrays<T>&,                     \
                                                      const physics::CentralDifference<T>&,       \
                                                      Vec3<T>*, HostSlidingState<T>&);            \
+  template ConstraintArrays<T> make_constraint_program<T>(const PreparedModel&);                 \
   template void BackendCore::step_scalars<T>(std::int64_t, T*) const;                            \
   template void BackendCore::activations<T>(double, T*) const;                                   \
   template double BackendCore::kinetic_energy<T>(const Vec3<T>*, const Vec3<T>*, const T*, int)  \

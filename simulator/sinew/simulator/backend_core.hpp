@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "sinew/common/math.hpp"
@@ -91,6 +92,9 @@ struct EngineArrays {
 // sliding_skin: s of the candidate lists in grid cells of each surface (> 0).
 template <typename T>
 EngineArrays<T> make_engine_arrays(const PreparedModel& p, double sliding_skin);
+// The constraint program of `p` (EngineArrays::constraints; rebuilt when a live force slot changes).
+template <typename T>
+ConstraintArrays<T> make_constraint_program(const PreparedModel& p);
 
 // The sliding state of a run in host memory (the CPU engines): per binding its closest triangle, the
 // warm start of its grid searches, its candidate list and the list's anchor (passes/
@@ -146,6 +150,21 @@ class BackendCore {
   void step_scalars(std::int64_t step, T* row) const;
   template <typename T>
   void activations(double t, T* out) const;  // muscle_count() values at time t
+
+  // Steering (sinew-live, docs/live.md): changes between steps, read by step_scalars, so both
+  // engines see them from their next step() call. The plan is never rebuilt.
+  // Activation override of muscle m (model order): a ∈ [0, 1] replaces the curve's value from the
+  // next step; nullopt returns to the curve. Throws ConfigError for m out of range, a not finite,
+  // or a above Setup::max_activation(m) (the time step was planned for that; a live run sets
+  // Setup::activation_overrides, which makes it 1).
+  void set_activation_override(std::size_t m, std::optional<double> a);
+  std::optional<double> activation_override(std::size_t m) const;
+  // Live force slots (Setup::force_slots): force sets after the scene's. set_force_slot gives slot
+  // k these nodes (ids checked) and per-node force (N, finite), factor 1; clear_force_slot empties
+  // it (factor 0). The engine must then rebuild its constraint program (make_constraint_program).
+  std::size_t force_slot_count() const { return force_slots_; }
+  void set_force_slot(std::size_t k, std::vector<Index> nodes, const std::array<double, 3>& force);
+  void clear_force_slot(std::size_t k);
 
   // Instability: the blow-up bound (docs/physics.md, "Instability") for scalar epsilon `eps`.
   void set_initial_energy(const Energies& e0);
@@ -217,6 +236,8 @@ class BackendCore {
   PreparedModel prepared_;
   std::vector<Index> model_rigid_;  // the model's rigid nodes, for the stop messages
   std::size_t muscle_count_ = 0;
+  std::vector<std::optional<double>> activation_override_;  // per muscle (empty: none set)
+  std::size_t force_slots_ = 0;                             // the last entries of prepared_.forces
   // J, ε · volume · min modulus (the strain energy's round-off) + ½ · total mass · (ε · max |x| /
   // Δt)² (the kinetic energy of positions moving by their own round-off each step); docs/physics.md
   // "Instability".

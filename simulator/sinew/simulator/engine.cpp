@@ -85,6 +85,23 @@ class CpuEngine final : public Backend {
   ElementFields element_fields() override {
     return core_.element_fields(a_, u_.data(), step_, threads_);
   }
+  void set_activation_override(std::size_t m, std::optional<double> a) override {
+    core_.set_activation_override(m, a);
+    forces_valid_ = energy_valid_ = false;  // forces at u(n) depend on the activation
+  }
+  std::optional<double> activation_override(std::size_t m) const override {
+    return core_.activation_override(m);
+  }
+  std::size_t force_slot_count() const override { return core_.force_slot_count(); }
+  void set_force_slot(std::size_t k, const std::vector<Index>& nodes,
+                      const std::array<double, 3>& force) override {
+    core_.set_force_slot(k, nodes, force);
+    a_.constraints = make_constraint_program<T>(core_.prepared());
+  }
+  void clear_force_slot(std::size_t k) override {
+    core_.clear_force_slot(k);
+    a_.constraints = make_constraint_program<T>(core_.prepared());
+  }
   Frame frame(bool with_fields) override {
     Frame f{step_, time(), displacements(), energies(), {}};
     if (with_fields) f.fields = core_.deferred_element_fields(a_, u_, step_, threads_);

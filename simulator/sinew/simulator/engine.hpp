@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,16 @@ class Backend {
   virtual std::array<double, 3> reaction(const std::vector<Index>& nodes) = 0;
   virtual Energies energies() = 0;
   virtual ElementFields element_fields() = 0;
+
+  // Steering between steps (sinew-live, docs/live.md; BackendCore): from the next step() call.
+  // Activation override of muscle m (nullopt: back to its curve). Throws ConfigError.
+  virtual void set_activation_override(std::size_t m, std::optional<double> a) = 0;
+  virtual std::optional<double> activation_override(std::size_t m) const = 0;
+  // Live force slot k (Setup::force_slots): these nodes each get `force` (N) until cleared.
+  virtual std::size_t force_slot_count() const = 0;
+  virtual void set_force_slot(std::size_t k, const std::vector<Index>& nodes,
+                              const std::array<double, 3>& force) = 0;
+  virtual void clear_force_slot(std::size_t k) = 0;
   // The frame at the current step: displacements and energies now, the element fields (when
   // `with_fields`) deferred (Frame).
   virtual Frame frame(bool with_fields) = 0;

@@ -201,9 +201,7 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
       if (mu.fractions.size() != mu.elements.size() || mu.fibres.size() != mu.elements.size())
         throw ConfigError("", "model.muscles", "elements, fractions and fibres differ in length")
             .at(std::int64_t(m));
-      const double a_max = m < setup.activation.size() && !setup.activation[m].points.empty()
-                               ? std::clamp(setup.activation[m].max_value(), 0.0, 1.0)
-                               : 0.0;
+      const double a_max = setup.max_activation(m);
       const double fp_slope =
           physics::passive_fibre_max_slope(mu.passive_p1, mu.passive_p2, mu.passive_linear_stretch);
       for (std::size_t i = 0; i < mu.elements.size(); ++i) {

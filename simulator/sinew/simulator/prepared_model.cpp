@@ -72,9 +72,7 @@ PreparedModel prepare_model(const formats::Model& model, const Setup& setup, con
     std::vector<std::int64_t> fill(p.muscle_offset.begin(), p.muscle_offset.end() - 1);
     for (std::size_t m = 0; m < model.muscles.size(); ++m) {
       const auto& mu = model.muscles[m];
-      const double a_max = m < setup.activation.size() && !setup.activation[m].points.empty()
-                               ? std::clamp(setup.activation[m].max_value(), 0.0, 1.0)
-                               : 0.0;
+      const double a_max = setup.max_activation(m);
       for (std::size_t i = 0; i < mu.elements.size(); ++i) {
         const auto k = std::size_t(fill[std::size_t(mu.elements[i])]++);
         p.muscle_id[k] = std::int32_t(m);
@@ -100,6 +98,12 @@ PreparedModel prepare_model(const formats::Model& model, const Setup& setup, con
       const double k = 1.0 / double(f.nodes.size());
       s.per_node = {f.total[0] * k, f.total[1] * k, f.total[2] * k};
       s.curve = f.curve;
+      p.forces.push_back(std::move(s));
+    }
+    // Live force slots: empty and off (curve 0) until BackendCore::set_force_slot.
+    for (int k = 0; k < setup.force_slots; ++k) {
+      PreparedLoadSet s;
+      s.curve = Curve::constant(0.0);
       p.forces.push_back(std::move(s));
     }
     for (const auto& pd : setup.prescribed) {

@@ -1,7 +1,5 @@
 #include "sinew/simulator/runner.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -9,24 +7,21 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
-#include <sstream>
 
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/common/progress.hpp"
-#include "sinew/formats/model_file.hpp"
 #include "sinew/simulator/checkpoint.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/engine.hpp"
 #include "sinew/simulator/frame_writer.hpp"
+#include "sinew/simulator/output_schedule.hpp"
 #include "sinew/simulator/probes.hpp"
 #include "sinew/simulator/results_writer.hpp"
-#include "sinew/simulator/run_estimate.hpp"
 #include "sinew/simulator/run_limits.hpp"
+#include "sinew/simulator/run_setup.hpp"
 
 namespace sinew::simulator {
 
@@ -38,21 +33,6 @@ std::atomic<int> g_interrupt{0};
 
 extern "C" void on_signal(int sig) {
   g_interrupt.store(sig);
-}
-
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, "", "cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// The step of event k for events every `interval` of scene time: the first step at or after
-// k · interval. A function of k alone, so a resumed run picks the same steps.
-std::int64_t event_step(std::int64_t k, double interval, double time_scaling, double dt) {
-  const double x = double(k) * interval * time_scaling / dt;
-  return static_cast<std::int64_t>(std::ceil(x - 1e-9 * std::max(1.0, x)));
 }
 
 // Wall time of the step loop by stage (RunSummary::loop_stages): each timed call adds to its stage;
@@ -82,39 +62,6 @@ class StageClock {
  private:
   double seconds_[count] = {};
 };
-
-// Iterates the event steps of one output stream (frames or probe rows) past a given step.
-class Schedule {
- public:
-  Schedule(double interval, double time_scaling, double dt, std::int64_t last_step, bool every_step)
-      : interval_(interval),
-        scaling_(time_scaling),
-        dt_(dt),
-        last_(last_step),
-        every_(every_step) {}
-  // The first event step strictly after `step` (last_step when none before it).
-  std::int64_t next_after(std::int64_t step) {
-    if (step >= last_) return std::numeric_limits<std::int64_t>::max();
-    if (every_) return step + 1;
-    if (!(interval_ > 0)) return last_;
-    // Jump to the events of this step first: with an interval far below Δt, counting up one
-    // event at a time would take interval/Δt iterations per step.
-    const double first = std::min(double(step) * dt_ / (interval_ * scaling_), 0x1p62);
-    k_ = std::max(k_, static_cast<std::int64_t>(first) - 1);
-    while (event_step(k_, interval_, scaling_, dt_) <= step) ++k_;
-    return std::min(event_step(k_, interval_, scaling_, dt_), last_);
-  }
-
- private:
-  double interval_, scaling_, dt_;
-  std::int64_t last_;
-  bool every_;
-  std::int64_t k_ = 0;
-};
-
-std::string device_text(const std::string& backend, int threads) {
-  return fmt::format("{} (OpenMP, {} thread{})", backend, threads, threads == 1 ? "" : "s");
-}
 
 std::string hourglass_warning(const Energies& e) {
   return fmt::format(
@@ -146,131 +93,20 @@ RunResult run_scene(const RunOptions& options) {
   const auto print =
       options.print ? options.print : [](const std::string& s) { std::fputs(s.c_str(), stdout); };
 
-  // Device first: a request this build cannot satisfy is refused before any work.
-  if (options.device != "cpu" && options.device != "auto" && options.device != "cuda") {
-    throw ConfigError(
-        "", "--device",
-        fmt::format("unknown device '{}' (expected cpu, cuda or auto)", options.device));
-  }
-  bool cuda = false;
-  if (options.device == "cuda") {
-    if (!cuda_device_available()) {
-#if defined(SINEW_CUDA_ENABLED)
-      throw ResourceError(
-          "", "--device",
-          "no CUDA device is available to this process; use --device cpu (or auto)");
-#else
-      throw ResourceError(
-          "", "--device",
-          "this build of sinew has no CUDA backend (configure with "
-          "-DSINEW_WITH_CUDA=ON where nvcc is available); use --device cpu (or auto)");
-#endif
-    }
-    cuda = true;
-  } else if (options.device == "auto") {
-    cuda = cuda_device_available();
-  }
-
-  const auto scene_text = read_text(options.scene_path);
-  const auto scene = parse_scene_text(scene_text, options.scene_path,
-                                      fs::path(options.scene_path).parent_path().string());
-  if (!fs::exists(scene.model_path)) {
-    throw ConfigError(options.scene_path, "model",
-                      fmt::format("the model file '{}' does not exist (model: {}, relative to the "
-                                  "scene's folder)",
-                                  scene.model_path, scene.model));
-  }
-  const formats::Model model = formats::read_model(scene.model_path);
-  ResolveOptions ro;
-  ro.precision = options.precision;
-  ro.threads = options.threads;
-  const auto resolved = resolve_scene(scene, model, ro);
-  const auto& setup = resolved.setup;
-
-  std::unique_ptr<Backend> backend;
-  try {
-    CudaOptions cuda_options;
-    cuda_options.device = options.cuda_device;
-    if (options.make_backend) cuda = false;  // the caller's engine, on the host
-    backend = options.make_backend ? options.make_backend(model, setup)
-              : cuda               ? make_cuda_backend(model, setup, cuda_options)
-                                   : make_cpu_backend(model, setup);
-  } catch (const ConfigError& e) {
-    // The engine names Setup fields; point at the scene key the user wrote instead.
-    if (!e.file().empty()) throw;
-    static const std::pair<const char*, const char*> kKeys[] = {
-        {"time_step.user_dt", "time_step.value"},
-        {"time_step.safety_factor", "time_step.safety_factor"},
-        {"duration", "duration"},
-        {"damping_alpha", "damping"},
-        {"mass_scaling", "mass_scaling"},
-        {"time_scaling", "time_scaling"},
-        {"hourglass.kappa", "hourglass.kappa"},
-        {"gravity", "gravity"}};
-    std::string key = e.field();
-    for (const auto& [field, scene_key] : kKeys) {
-      if (key == field) key = scene_key;
-    }
-    auto err = ConfigError(options.scene_path, key, e.problem());
-    if (e.index()) err.at(*e.index());
-    throw err;
-  }
+  LoadedRun run = load_run(options);
+  const Scene& scene = run.scene;
+  const formats::Model& model = run.model;
+  const ResolvedScene& resolved = run.resolved;
+  const Setup& setup = resolved.setup;
+  std::unique_ptr<Backend>& backend = run.backend;
   const Plan& plan = backend->plan();
-  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  const auto& counts = run.counts;
 
   RunResult result;
   result.output_dir = options.output_dir;
+  result.summary = run.summary;
   RunSummary& summary = result.summary;
-  summary.scene_file = options.scene_path;
-  summary.model_file = scene.model_path;
-  summary.device =
-      cuda ? "cuda (" + cuda_device_name() + ")" : device_text(backend->name(), threads);
-  summary.precision = precision_name(setup.precision);
-  summary.threads = threads;
-  summary.effects = resolved.effects;
-  summary.duration = scene.duration;
-  summary.time_scaling = setup.time_scaling;
-  summary.mass_scaling = setup.mass_scaling;
-  summary.dt = plan.dt;
-  summary.dt_critical = plan.dt_critical;
-  summary.dt_reason = plan.dt_reason;
-  summary.steps_planned = plan.steps;
-  summary.warnings = plan.warnings;
-  for (const auto& p : resolved.probes) {
-    if (p.distance > model.grid.voxel_size) {
-      summary.warnings.push_back(
-          fmt::format("probe '{}': the nearest node is {:.6g} m from the point (more than a voxel)",
-                      p.name, p.distance));
-    }
-  }
-
-  const auto counts = count_outputs(model, plan, resolved);
-  if (options.explain) {
-    std::string text = plan.explain();
-    if (!text.empty() && text.back() != '\n') text += '\n';
-    text += fmt::format("Device: {}\n", summary.device);
-    text +=
-        fmt::format("Outputs: {}\n", options.output_dir.empty() ? "(none)" : options.output_dir);
-    std::string fields;
-    for (auto f : resolved.fields)
-      fields += (fields.empty() ? "" : ", ") + std::string(to_string(f));
-    text += fmt::format(
-        "  frames every {} s of scene time ({}), fields: {}\n",
-        resolved.output_interval > 0 ? fmt::format("{:.6g}", resolved.output_interval) : "-",
-        resolved.output_interval > 0 ? "plus the first and last" : "first and last only", fields);
-    text += describe_outputs(counts);
-    for (const auto& p : resolved.probes)
-      text += fmt::format("  probe '{}': {}\n", p.name, p.description);
-    for (const auto& w : summary.warnings) text += fmt::format("  warning: {}\n", w);
-    const bool element_fields =
-        std::any_of(resolved.fields.begin(), resolved.fields.end(), [](auto f) {
-          return f == OutputField::stress || f == OutputField::jacobian ||
-                 f == OutputField::energy_density;
-        });
-    text += describe(estimate_run(*backend, resolved, counts, element_fields));
-    if (options.explain_more) text += options.explain_more(model, plan);
-    print(text);
-  }
+  if (options.explain) print(explain_run(run, options));
   if (!options.run) return result;
   check_output_limits(counts, resolved, options.scene_path, options.force);
 
@@ -284,15 +120,9 @@ RunResult run_scene(const RunOptions& options) {
   };
   const auto summary_path = out("run_summary.json");
   const auto checkpoint_path = out("checkpoint.h5");
-  const auto digest = run_digest(scene_text, scene.model_path, summary.precision);
+  const auto digest = run_digest(run.scene_text, scene.model_path, summary.precision);
 
-  ResultsOptions ropt;
-  ropt.stress = scene.output.has(OutputField::stress);
-  ropt.jacobian = scene.output.has(OutputField::jacobian);
-  ropt.energy_density = scene.output.has(OutputField::energy_density);
-  ropt.surfaces = scene.output.has(OutputField::surfaces);
-  ropt.model_file = scene.model_path;
-  ropt.scene_file = options.scene_path;
+  const ResultsOptions ropt = results_options(scene, options.scene_path);
   const bool want_fields = ropt.stress || ropt.jacobian || ropt.energy_density;
 
   std::unique_ptr<ResultsWriter> results;
@@ -329,8 +159,8 @@ RunResult run_scene(const RunOptions& options) {
   const double dt = backend->dt();
   const double s = setup.time_scaling;
   const auto scene_time = [&] { return backend->time() / s; };
-  Schedule frames(resolved.output_interval, s, dt, total, false);
-  Schedule rows(resolved.probe_interval, s, dt, total, !(resolved.probe_interval > 0));
+  OutputSchedule frames(resolved.output_interval, s, dt, total, false);
+  OutputSchedule rows(resolved.probe_interval, s, dt, total, !(resolved.probe_interval > 0));
 
   // Frames are written on another thread while a GPU steps on (frame_writer.hpp).
   FrameWriter frame_writer(*results, backend->host_idle_while_stepping(), s);

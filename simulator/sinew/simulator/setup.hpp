@@ -8,6 +8,7 @@
 //   element stresses/forces (+ hourglass, + muscles) -> per-node gather -> external forces
 //   -> central-difference update -> sliding surfaces -> sliding planes -> prescribed -> rigid.
 // An effect that is off allocates and computes nothing (see Plan::explain()).
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -117,12 +118,29 @@ struct Setup {
   // Used when effects.loads.
   std::vector<PrescribedDisplacement> prescribed;
   std::vector<NodalForce> forces;
+  // Steerable force slots of a live run (sinew-live, docs/live.md), used when effects.loads: each
+  // is a force set after `forces` whose nodes and per-node force are set between steps
+  // (Backend::set_force_slot); it starts empty and off. 0 in every batch run.
+  int force_slots = 0;
+  // A live run (sinew-live): activations may be overridden to any value in [0, 1] between steps
+  // (BackendCore::set_activation_override), so the time step and the blow-up bound take every
+  // muscle's peak as 1 (max_activation). false in every batch run.
+  bool activation_overrides = false;
   // Always honoured.
   std::vector<SlidingPlane> sliding_planes;
   std::vector<InitialVelocity> initial_velocities;
   // effects.sliding uses every binding in Model::sliding (no selection here).
 
   double output_interval = 0;  // s, for sim-io's writers; the engine does not use it
+
+  // The largest activation muscle m can have in this run (the time step's and the blow-up
+  // bound's): its curve's peak clamped to [0, 1] (0 without a curve), 1 with overrides.
+  double max_activation(std::size_t m) const {
+    if (activation_overrides) return 1.0;
+    return m < activation.size() && !activation[m].points.empty()
+               ? std::clamp(activation[m].max_value(), 0.0, 1.0)
+               : 0.0;
+  }
 
   // Energies are evaluated and the kinetic-energy blow-up test made every `energy_interval` steps
   // (and on request). NaN/Inf and J ≤ 0 are checked every step.

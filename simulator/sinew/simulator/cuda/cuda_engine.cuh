@@ -10,10 +10,12 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "sinew/common/error.hpp"
 #include "sinew/simulator/backend_core.hpp"
 #include "sinew/simulator/cuda/device_array.cuh"
 #include "sinew/simulator/cuda/launch.cuh"
@@ -58,6 +60,22 @@ class CudaEngine final : public Backend, public CudaTiming {
   std::array<double, 3> reaction(const std::vector<Index>& nodes) override;
   Energies energies() override;
   ElementFields element_fields() override;
+  // Steering (docs/live.md): activation overrides reach the rows step() stages from the core.
+  void set_activation_override(std::size_t m, std::optional<double> a) override {
+    core_.set_activation_override(m, a);
+  }
+  std::optional<double> activation_override(std::size_t m) const override {
+    return core_.activation_override(m);
+  }
+  // Live force slots would re-upload the constraint program under captured graphs: not built yet.
+  std::size_t force_slot_count() const override { return 0; }
+  void set_force_slot(std::size_t, const std::vector<Index>&,
+                      const std::array<double, 3>&) override {
+    throw ConfigError("", "drag",
+                      "drag forces are not available on the CUDA backend yet (docs/live.md); use "
+                      "--device cpu to drag");
+  }
+  void clear_force_slot(std::size_t) override {}
   Frame frame(bool with_fields) override;
   bool host_idle_while_stepping() const override { return true; }
 

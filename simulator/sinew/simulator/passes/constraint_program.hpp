@@ -63,7 +63,10 @@ SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, 
     const std::int32_t code = d.op[q], arg = code & kOpArg;
     switch (code >> kOpShift) {
       case kOpForce:
-        if (loads)
+        // A force at factor 0 is skipped rather than added as ±0: a set that is off leaves the
+        // node's bits as if the set were absent (a live run's empty force slot and the reproduced
+        // scene's inactive drag sets, docs/live.md).
+        if (loads && factor[arg] != T(0))
           physics::add_nodal_force(d.cd, d.inverse_mass[i], factor[arg] * d.force_per_node[arg], v);
         break;
       case kOpCapture:
@@ -94,6 +97,7 @@ SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, 
     for (std::int32_t q = begin; q < end; ++q) {
       const std::int32_t code = d.op[q], arg = code & kOpArg, kind = code >> kOpShift;
       if (kind == kOpForce) {
+        if (factor[arg] == T(0)) continue;
         const double f = double(factor[arg]);
         for (int k = 0; k < 3; ++k)
           w += f * double(d.force_per_node[arg][k]) * 0.5 * (double(v[k]) - double(vp[k]));

@@ -1,0 +1,39 @@
+#pragma once
+// Playback of a saved run (sinew-live --play RESULTS.h5; docs/live.md, "Playback and continue"):
+// the frames of a results file, read one at a time for scrubbing, and the scene to continue it with.
+//
+// Continuing from frame k replays the scene from step 0 to the frame's step at full speed and goes
+// on live from there. The engines are deterministic (any thread count, any step() call lengths
+// give the same bits), so the replayed state is the run's own state at that step, velocities
+// included; a results file holds u(n) only, which a restore (the checkpoint path) could not
+// continue from exactly. Same backend and precision as the run that wrote the file.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sinew::live {
+
+class RecordedRun {
+ public:
+  // Opens a results file (docs/results-format.md). Throws FormatError / IoError.
+  explicit RecordedRun(std::string path);
+  const std::string& path() const { return path_; }
+  std::size_t frame_count() const { return steps_.size(); }
+  const std::vector<double>& times() const { return times_; }  // scene time, s
+  const std::vector<std::int64_t>& steps() const { return steps_; }
+  std::size_t nodes() const { return nodes_; }
+  // u of frame k, N × 3, m. Throws FormatError for k out of range or an unreadable frame.
+  std::vector<double> displacement(std::size_t k) const;
+  // The scene to continue with: scene.yaml next to the file when there is one (a live recording's
+  // reproducing scene), else the file's scene_file attribute (relative paths: to the current
+  // folder, as sinew-simulate was given it).
+  std::string scene() const;
+
+ private:
+  std::string path_, scene_attribute_;
+  std::vector<double> times_;
+  std::vector<std::int64_t> steps_;
+  std::size_t nodes_ = 0;
+};
+
+}  // namespace sinew::live

@@ -1,0 +1,343 @@
+// A live session steered step by step (sliders, drags, back to curve) and recorded; the scene it
+// writes, run by sinew-simulate's runner on the same backend and precision, gives the same bits in
+// every recorded frame (displacement, von Mises stress, J). Each backend built; CUDA skips without
+// a device (and, lacking drag forces there, steers the muscle only).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <thread>
+
+#include "../simulator/sim_io_support.hpp"
+#include "live_support.hpp"
+#include "results_compare.hpp"
+#include "sinew/common/error.hpp"
+#include "sinew/common/log.hpp"
+#include "sinew/live/session.hpp"
+#include "sinew/simulator/cuda_backend.hpp"
+#include "sinew/simulator/run_setup.hpp"
+
+namespace sinew::live {
+namespace {
+
+using simulator::testing::TempDir;
+
+using testing::frames_by_step;
+
+class LiveSession : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override {
+    if (GetParam() == "cuda" && !simulator::cuda_device_available())
+      GTEST_SKIP() << "no CUDA device (or a build without CUDA)";
+    log::set_level(log::Level::warn);
+  }
+};
+
+// Steps the paused session by n and waits for it.
+void step(Session& s, std::int64_t n) {
+  const std::int64_t target = s.step_index() + n;
+  Command c;
+  c.kind = Command::Kind::step;
+  c.count = n;
+  s.submit(c);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (s.step_index() < target &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_EQ(s.step_index(), target);
+  ASSERT_TRUE(s.wait_idle(10));
+  // And the frame published where stepping stopped.
+  const auto frame_step = [&] {
+    double sd[2];
+    std::memcpy(sd, s.latest_frame()->data() + 16, 16);
+    return std::int64_t(sd[0]);
+  };
+  while (frame_step() != target && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_EQ(frame_step(), target);
+}
+
+void activate(Session& s, std::optional<double> a) {
+  Command c;
+  c.kind = Command::Kind::activation;
+  c.muscle = "flexor";
+  c.value = a;
+  s.submit(c);
+}
+
+// Writes the test case into dir and returns the options of a quiet run of its scene.
+simulator::RunOptions case_options(const TempDir& dir, const std::string& device) {
+  testing::write_live_case(dir.str());
+  simulator::RunOptions o;
+  o.scene_path = dir / "live_box.yaml";
+  o.device = device;
+  o.quiet = true;
+  return o;
+}
+
+// The skin displacement floats of the session's latest frame.
+std::vector<float> frame_floats(const Session& s) {
+  const auto f = s.latest_frame();
+  std::vector<float> d((f->size() - kFrameHeaderBytes) / 4);
+  std::memcpy(d.data(), f->data() + kFrameHeaderBytes, d.size() * 4);
+  return d;
+}
+
+TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
+  const bool cuda = GetParam() == "cuda";
+  TempDir dir("live_session");
+  testing::write_live_case(dir.str());
+  const auto scene = dir / "live_box.yaml";
+  for (const char* precision : {"double", "float"}) {
+    SCOPED_TRACE(precision);
+    simulator::RunOptions o;
+    o.scene_path = scene;
+    o.device = GetParam();
+    o.quiet = true;
+    o.precision = std::string(precision) == "float" ? simulator::Precision::float32
+                                                    : simulator::Precision::float64;
+    auto run = simulator::load_run(o, make_live_setup);
+    const auto n_nodes = run.model.node_count();
+    SessionOptions so;
+    so.start_paused = true;
+    so.record_dir = dir / (std::string("rec_") + precision);
+    Session session(std::move(run), so);
+    session.start();
+    step(session, 60);  // inside the scene's ramp (0.05 s is 223 steps)
+    activate(session, 0.8);
+    step(session, 40);
+    Command drag;
+    drag.kind = Command::Kind::drag;
+    drag.point = {0.024, 0.004, 0.006};  // the free end's top edge
+    drag.force = {0, 0, 0.004};
+    drag.radius = 0.0025;
+    if (cuda) {
+      EXPECT_THROW(session.submit(drag), ProtocolError);
+    } else {
+      session.submit(drag);
+      step(session, 30);
+      drag.force = {0, 0.002, 0.006};  // the mouse moves: same nodes, new force
+      session.submit(drag);
+      step(session, 25);
+      Command release;
+      release.kind = Command::Kind::release;
+      session.submit(release);
+    }
+    step(session, 20);
+    activate(session, std::nullopt);  // back to the curve inside its ramp
+    step(session, 50);
+    activate(session, 0.05);
+    step(session, 17);
+    Command off;
+    off.kind = Command::Kind::record;
+    off.on = false;
+    session.submit(off);
+    ASSERT_TRUE(session.wait_idle(30));
+    session.stop();
+    EXPECT_EQ(session.last_error(), "");
+
+    const auto rec = so.record_dir;
+    for (const char* f :
+         {"results.h5", "results.xdmf", "scene.yaml", "steering_log.json", "run_summary.json"})
+      EXPECT_TRUE(std::filesystem::exists(rec + "/" + f)) << f;
+    auto ro = simulator::testing::options_for(rec + "/scene.yaml", dir / "reproduced");
+    ro.device = GetParam();
+    ro.precision = o.precision;
+    simulator::run_scene(ro);
+    for (const char* name : {"/frames/displacement", "/frames/von_mises", "/frames/J"}) {
+      const auto live = frames_by_step(rec + "/results.h5", name);
+      const auto batch = frames_by_step(dir / "reproduced/results.h5", name);
+      ASSERT_GE(live.size(), 3u) << name;
+      std::size_t compared = 0;
+      for (const auto& [st, values] : live) {
+        const auto it = batch.find(st);
+        ASSERT_NE(it, batch.end()) << name << ": no reproduced frame at step " << st;
+        ASSERT_EQ(values.size(), it->second.size());
+        EXPECT_EQ(std::memcmp(values.data(), it->second.data(), values.size() * sizeof(double)), 0)
+            << name << " differs at step " << st;
+        ++compared;
+      }
+      EXPECT_EQ(compared, live.size());
+    }
+    // The steering did something: the last frame differs from the scene alone (activation 0.3
+    // held), i.e. the free end contracted less under 0.05.
+    const auto last = frames_by_step(rec + "/results.h5", "/frames/displacement").rbegin()->second;
+    ASSERT_EQ(last.size(), 3 * n_nodes);
+    for (double x : last) ASSERT_TRUE(std::isfinite(x));
+  }
+}
+
+TEST_P(LiveSession, SliderAndDragMoveTheSkin) {
+  if (GetParam() == "cuda") GTEST_SKIP() << "drag forces are CPU-only (docs/live.md)";
+  TempDir dir("live_steer");
+  const auto o = case_options(dir, GetParam());
+  auto run = simulator::load_run(o, make_live_setup);
+  SessionOptions so;
+  so.start_paused = true;
+  Session session(std::move(run), so);
+  session.start();
+  // The free end (x = 24 mm) moves towards the clamp when the muscle contracts. Frames carry the
+  // skin's displacement; read the latest frame after each phase.
+  activate(session, 0.0);
+  step(session, 400);
+  const auto rest = frame_floats(session);
+  activate(session, 1.0);
+  step(session, 400);
+  const auto contracted = frame_floats(session);
+  double min_dx = 0;
+  for (std::size_t v = 0; v < contracted.size() / 3; ++v)
+    min_dx = std::min(min_dx, double(contracted[3 * v] - rest[3 * v]));
+  EXPECT_LT(min_dx, -1e-4) << "the slider at 1 should pull the free end towards the clamp";
+  Command drag;
+  drag.kind = Command::Kind::drag;
+  drag.point = {0.024, 0.002, 0.006};
+  drag.force = {0, 0, 0.02};
+  drag.radius = 0.003;
+  session.submit(drag);
+  step(session, 400);
+  const auto dragged = frame_floats(session);
+  double max_dz = 0;
+  for (std::size_t v = 0; v < dragged.size() / 3; ++v)
+    max_dz = std::max(max_dz, double(dragged[3 * v + 2] - contracted[3 * v + 2]));
+  EXPECT_GT(max_dz, 1e-4) << "the drag upwards should lift the picked region";
+  session.stop();
+}
+
+TEST_P(LiveSession, InstabilityPausesWithTheEnginesMessageAndResetRecovers) {
+  if (GetParam() == "cuda") GTEST_SKIP() << "drag forces are CPU-only (docs/live.md)";
+  TempDir dir("live_unstable");
+  const auto o = case_options(dir, GetParam());
+  SessionOptions so;
+  so.start_paused = true;
+  Session session(simulator::load_run(o, make_live_setup), so);
+  session.start();
+  // 100 N on the soft block's free corner inverts its elements within a few steps.
+  Command drag;
+  drag.kind = Command::Kind::drag;
+  drag.point = {0.024, 0.008, 0.006};
+  drag.force = {0, 0, 100};
+  drag.radius = 0.001;
+  session.submit(drag);
+  Command c;
+  c.kind = Command::Kind::step;
+  c.count = 2000;
+  session.submit(c);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (session.last_error().empty() &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  const std::string message = session.last_error();
+  ASSERT_FALSE(message.empty()) << "the drag should have made the run unstable";
+  EXPECT_NE(message.find("step"), std::string::npos) << message;
+  EXPECT_TRUE(session.paused());
+  const std::int64_t stopped = session.step_index();
+  EXPECT_LT(stopped, 2000);
+  // The status tells the page (published after the failure, with the message).
+  for (int k = 0; k < 100 && session.latest_status()->find("\"error\":null") != std::string::npos;
+       ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_NE(session.latest_status()->find("\"error\":\""), std::string::npos);
+  // The engine stayed at its last good state: the frame is finite.
+  const auto f = session.latest_frame();
+  std::vector<float> d((f->size() - kFrameHeaderBytes) / 4);
+  std::memcpy(d.data(), f->data() + kFrameHeaderBytes, d.size() * 4);
+  for (float x : d) ASSERT_TRUE(std::isfinite(x));
+  // Reset: the error clears, the drag is gone, and the engine steps again.
+  Command reset;
+  reset.kind = Command::Kind::reset;
+  session.submit(reset);
+  ASSERT_TRUE(session.wait_idle(10));
+  EXPECT_EQ(session.last_error(), "");
+  EXPECT_EQ(session.step_index(), 0);
+  step(session, 300);
+  EXPECT_EQ(session.last_error(), "");
+  session.stop();
+}
+
+TEST_P(LiveSession, OverridesStayWithinTheActivationTheTimeStepWasPlannedFor) {
+  TempDir dir("live_cap");
+  const auto o = case_options(dir, GetParam());
+  // The scene's curve peaks at 0.3: a run planned as the scene (playback) takes overrides up to
+  // that; a live run is planned for 1 (a smaller Δt).
+  auto played = simulator::load_run(o, make_playback_setup);
+  EXPECT_NO_THROW(played.backend->set_activation_override(0, 0.3));
+  EXPECT_THROW(played.backend->set_activation_override(0, 0.31), sinew::ConfigError);
+  auto live = simulator::load_run(o, make_live_setup);
+  EXPECT_NO_THROW(live.backend->set_activation_override(0, 1.0));
+  EXPECT_LT(live.backend->dt(), played.backend->dt());
+}
+
+TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
+  TempDir dir("live_play");
+  const auto o = case_options(dir, GetParam());
+  const auto scene = o.scene_path;
+  // A batch run to play back.
+  auto ro = simulator::testing::options_for(scene, dir / "batch");
+  ro.device = GetParam();
+  simulator::run_scene(ro);
+  const std::string results = dir / "batch/results.h5";
+  const RecordedRun recorded(results);
+  ASSERT_GT(recorded.frame_count(), 10u);
+  EXPECT_EQ(recorded.scene(), scene);
+
+  SessionOptions so;
+  so.play = results;
+  Session session(simulator::load_run(o, make_playback_setup), so);
+  session.start();
+  const auto seek = [&](std::int64_t k) {
+    Command c;
+    c.kind = Command::Kind::seek;
+    c.count = k;
+    session.submit(c);
+    ASSERT_TRUE(session.wait_idle(10));
+  };
+  Command step1;
+  step1.kind = Command::Kind::step;
+  EXPECT_THROW(session.submit(step1), ProtocolError);  // not while playing back
+  seek(9999);  // out of range: an error reply, nothing shown changes
+  const std::size_t k = 7;
+  seek(std::int64_t(k));
+  const auto shown = frame_floats(session);
+  std::uint32_t h[4];
+  double st[2];
+  std::memcpy(h, session.latest_frame()->data(), 16);
+  std::memcpy(st, session.latest_frame()->data() + 16, 16);
+  EXPECT_EQ(std::int64_t(st[0]), recorded.steps()[k]);
+  EXPECT_EQ(st[1], recorded.times()[k]);
+
+  // Continue: the scene is replayed to the frame's step; the engine's frame there is the file's.
+  Command go;
+  go.kind = Command::Kind::resume_from;
+  session.submit(go);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (session.step_index() < recorded.steps()[k] &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  ASSERT_TRUE(session.wait_idle(10));
+  // The frame published where the replay stopped.
+  const auto frame_step = [&] {
+    double sd[2];
+    std::memcpy(sd, session.latest_frame()->data() + 16, 16);
+    return std::int64_t(sd[0]);
+  };
+  while (frame_step() != recorded.steps()[k] &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  EXPECT_EQ(session.step_index(), recorded.steps()[k]);
+  EXPECT_TRUE(session.paused());
+  EXPECT_EQ(frame_floats(session), shown);
+  step(session, 10);  // live from there
+  Command seek_now;
+  seek_now.kind = Command::Kind::seek;
+  EXPECT_THROW(session.submit(seek_now), ProtocolError);  // playback is over
+  session.stop();
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, LiveSession, ::testing::Values("cpu", "cuda"),
+                         [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace sinew::live
