@@ -124,6 +124,20 @@ class PartitionedCpuEngine final : public simulator::Backend {
     if (with_fields) f.fields = core_.deferred_element_fields(a_, whole(u_), step_, threads_);
     return f;
   }
+  // Steering (sinew-live) is for one device: a partitioned run follows its scene's curves.
+  void set_activation_override(std::size_t, std::optional<double>) override {
+    throw ConfigError("", "steering",
+                      "a partitioned run cannot be steered (sinew-live runs on one device)");
+  }
+  std::optional<double> activation_override(std::size_t) const override { return std::nullopt; }
+  std::size_t force_slot_count() const override { return 0; }
+  void set_force_slot(std::size_t, const std::vector<Index>&,
+                      const std::array<double, 3>&) override {
+    throw ConfigError("", "steering", "a partitioned run has no live force slots");
+  }
+  void clear_force_slot(std::size_t) override {
+    throw ConfigError("", "steering", "a partitioned run has no live force slots");
+  }
 
  private:
   // Every binding's closest triangle, from its owner.
