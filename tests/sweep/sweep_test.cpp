@@ -195,7 +195,7 @@ TEST_P(SweepBackendTest, GravityGridGivesTheWeightOnTheBaseAndTheSameTableWithRu
   EXPECT_EQ(one.failed, 0);
   const double g[] = {9.81, 3.7, 1.62};
   for (std::size_t i = 0; i < 3; ++i) {
-    EXPECT_EQ(one.rows[i].status, "completed");
+    EXPECT_EQ(one.rows[i].status, "completed") << one.rows[i].message;
     ASSERT_TRUE(one.rows[i].figures[0]);
     // Settled: the base carries the weight m g (the damped run is within 1e-6 of rest).
     EXPECT_NEAR(*one.rows[i].figures[0], kMass * g[i], 1e-6 * kMass * g[i]) << i;
@@ -204,7 +204,7 @@ TEST_P(SweepBackendTest, GravityGridGivesTheWeightOnTheBaseAndTheSameTableWithRu
   // Runs at once in threads: the same figures, bit for bit (wall time aside).
   const auto two = sweep::run_sweep(sw, options("two", at_once));
   for (std::size_t i = 0; i < 3; ++i) {
-    EXPECT_EQ(two.rows[i].status, "completed");
+    EXPECT_EQ(two.rows[i].status, "completed") << two.rows[i].message;
     for (std::size_t f = 0; f + 1 < one.rows[i].figures.size(); ++f)
       EXPECT_EQ(one.rows[i].figures[f], two.rows[i].figures[f]) << i << " " << f;
   }

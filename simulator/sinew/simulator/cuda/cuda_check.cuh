@@ -3,6 +3,7 @@
 // where it was made (the GPU's own findings travel in a StepStatus, read at sync points).
 #include <cuda_runtime.h>
 
+#include <mutex>
 #include <string>
 
 #include "sinew/common/error.hpp"
@@ -15,3 +16,22 @@
                            std::string("CUDA error: ") + cudaGetErrorString(sinew_cuda_status_)); \
   } while (0)
 #define SINEW_CUDA_LAUNCHED() SINEW_CUDA_CHECK(cudaGetLastError())
+
+namespace sinew::simulator::cuda {
+
+// Engines in several host threads (sinew-sweep --concurrent, sinew-live beside a batch run) share
+// the device: one engine's graph capture and another's device-wide synchronisation must not
+// overlap, since cudaDeviceSynchronize waits on every stream, the capturing one too, which
+// invalidates that capture. Captures and device-wide syncs take this lock.
+inline std::mutex& capture_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+// cudaDeviceSynchronize under capture_mutex().
+inline void device_synchronize() {
+  std::lock_guard lock(capture_mutex());
+  device_synchronize();
+}
+
+}  // namespace sinew::simulator::cuda

@@ -188,7 +188,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   output_.allocate(n_);
 
   // Initial state: u(0) = 0 with the constraints at t = 0; u(−1) = u(0) − v0 Δt (as the CPU).
-  SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+  device_synchronize();
   {
     buf_[0].zero();
     // Constraints at t = 0 on the host path of the device kernels: run them on buffer 0.
@@ -205,7 +205,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     for (auto nd : prep.rigid) up[std::size_t(nd)] = u[std::size_t(nd)];
     SINEW_CUDA_CHECK(
         cudaMemcpy(buf_[2].get(), up.data(), n_ * sizeof(Vec3<T>), cudaMemcpyHostToDevice));
-    SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+    device_synchronize();
   }
   core_.set_initial_energy(energies());
   update_bound();

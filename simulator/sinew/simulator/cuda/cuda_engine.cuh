@@ -141,7 +141,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   void update_bound() {
     const BlowupBound b = core_.blowup_bound();
     SINEW_CUDA_CHECK(cudaMemcpy(bound_.get(), &b, sizeof b, cudaMemcpyHostToDevice));
-    SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+    device_synchronize();
   }
   // A device copy of the activations at the current step (energies and forces on demand).
   void upload_activation(DeviceArray<T>& a) const {

@@ -217,7 +217,7 @@ void CudaEngine<T>::restore(const State& s) {
   if (work_acc_.size()) work_acc_.zero();
   if (f_sum_.size()) f_sum_.zero();
   forget_slide_lists(stream_);
-  SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+  device_synchronize();
   core_.set_energy_reference(s.energy_reference);
   update_bound();
 }

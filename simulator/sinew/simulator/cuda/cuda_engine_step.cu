@@ -236,6 +236,8 @@ std::vector<std::pair<std::string, float>> CudaEngine<T>::stage_times(int repeat
 // of the energy interval: its scalars in slots 0 .. count − 1.
 template <typename T>
 cudaGraphExec_t CudaEngine<T>::capture_steps(int count) {
+  // No other engine's device-wide sync while this stream captures (cuda_check.cuh).
+  std::lock_guard lock(capture_mutex());
   cudaGraph_t g = nullptr;
   SINEW_CUDA_CHECK(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
   try {

@@ -39,14 +39,14 @@ class DeviceArray {
   void upload(const std::vector<V>& v) {
     allocate(v.size());
     if (n_) SINEW_CUDA_CHECK(cudaMemcpy(p_, v.data(), n_ * sizeof(V), cudaMemcpyHostToDevice));
-    SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+    device_synchronize();
   }
   void zero() {
     if (n_) SINEW_CUDA_CHECK(cudaMemset(p_, 0, n_ * sizeof(V)));
-    SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+    device_synchronize();
   }
   std::vector<V> download() const {
-    SINEW_CUDA_CHECK(cudaDeviceSynchronize());
+    device_synchronize();
     std::vector<V> v(n_);
     if (n_) SINEW_CUDA_CHECK(cudaMemcpy(v.data(), p_, n_ * sizeof(V), cudaMemcpyDeviceToHost));
     return v;
