@@ -337,6 +337,34 @@ TEST(Hdf5File, DamagedStringDatatypeInAnOldFormatHeader) {
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
 }
 
+// An attribute message whose dataspace size has its high byte flipped (e.g. 4 → 46,084) puts the value past the
+// message's end: HDF5 1.10 copied the value from out of bounds when looking the attribute up (a
+// segfault in H5Aexists) or read a string descriptor out of other bytes and spent 21 s clearing a
+// conversion buffer for it (fuzz cases in the earliest format). Refused when the file is opened.
+TEST(Hdf5File, AttributeMessageOverrunInAnOldFormatHeader) {
+  const auto path = temp_path("old_overrun.h5");
+  {
+    Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    ASSERT_TRUE(f.valid());
+    set_attribute(f, "label", std::string("sinew-model"), path, StringKind::variable);
+  }
+  auto b = file_bytes(path);
+  const auto name = b.find(std::string("label\0", 6));
+  ASSERT_NE(name, std::string::npos);
+  ASSERT_EQ(b[name - 1], 0) << "the dataspace's size (a few bytes) ends before the name";
+  b[name - 1] = static_cast<char>(0xb4);  // its high byte: + 46,080 bytes
+  const auto damaged = temp_path("damaged_overrun.h5");
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+      .write(b.data(), static_cast<std::streamsize>(b.size()));
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto message = error_of<FormatError>([&] {
+    auto f = open_checked(damaged);
+    (void)string_attribute(f, "label", damaged);
+  });
+  EXPECT_CONTAINS(message, damaged + ": /: attribute message 0 of its header is damaged");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+}
+
 // Files are written in the 1.8+ format, whose object headers carry checksums: a flipped byte in
 // the root group's header is refused instead of followed.
 TEST(Hdf5File, ObjectHeadersAreChecksummed) {

@@ -344,6 +344,7 @@ Handle open_file(const std::string& path, bool writable) {
   const Handle fapl = read_access();
   Handle f(H5Fopen(path.c_str(), writable ? H5F_ACC_RDWR : H5F_ACC_RDONLY, fapl), H5Fclose);
   if (!f.valid()) throw io_fail(path, "", "cannot open as an HDF5 file");
+  check_attribute_messages(f, path, "/");  // before any attribute is looked at
   return f;
 }
 
@@ -361,6 +362,7 @@ Handle open_checked(const std::string& path) {
   if (!f.valid()) {
     throw format_fail(path, "", "cannot open as HDF5, the file is truncated or corrupt");
   }
+  check_attribute_messages(f, path, "/");  // before any attribute is looked at
   return f;
 }
 

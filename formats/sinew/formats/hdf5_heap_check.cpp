@@ -111,7 +111,6 @@ std::optional<std::map<std::uint16_t, std::uint64_t>> collection_objects(RawFile
   return objects;
 }
 
-
 // The object header address of `obj`.
 std::optional<std::uint64_t> header_address(hid_t obj) {
 #if H5_VERSION_GE(1, 12, 0)
@@ -161,9 +160,12 @@ bool for_each_v1_message(RawFile& raw, std::uint64_t header, Visit visit) {
 }
 
 // The datatype and the 16-byte-or-so value of attribute `name` as stored in a version 1 object
-// header; nothing when the header is version 2 or the attribute is not found there.
+// header; nothing when the header is version 2 or the attribute is not found there. `damaged`: the
+// message's own sizes put the value past its end, where HDF5 would read a descriptor out of other
+// bytes (a damaged dataspace size made one read take 21 s in a fuzz case).
 struct RawAttribute {
   std::vector<unsigned char> datatype, value;
+  bool damaged = false;
 };
 std::optional<RawAttribute> v1_attribute(RawFile& raw, std::uint64_t header,
                                          const std::string& name) {
@@ -183,9 +185,12 @@ std::optional<RawAttribute> v1_attribute(RawFile& raw, std::uint64_t header,
             std::memcmp(d + start, name.c_str(), name.size() + 1) != 0) {
           return true;
         }
-        if (value <= size) {
-          out = RawAttribute{std::vector<unsigned char>(d + type_at, d + type_at + type_size),
-                             std::vector<unsigned char>(d + value, d + size)};
+        out = RawAttribute{};
+        if (type_at + type_size > size || value > size) {
+          out->damaged = true;
+        } else {
+          out->datatype.assign(d + type_at, d + type_at + type_size);
+          out->value.assign(d + value, d + size);
         }
         return false;
       });
@@ -270,15 +275,67 @@ void check_vlen_dataset(hid_t dataset, const std::string& file, const std::strin
   }
 }
 
+void check_attribute_messages(hid_t obj, const std::string& file, const std::string& where) {
+  const auto header = header_address(obj);
+  if (!header) return;
+  RawFile raw(obj, file, where);
+  int index = 0;
+  std::string damage;
+  for_each_v1_message(
+      raw, *header, [&](std::uint64_t type, const unsigned char* d, std::size_t size) {
+        if (type != 0x0C) return true;
+        const int at = index++;
+        auto bad = [&](const std::string& what) {
+          damage = fmt::format("attribute message {} of its header is damaged ({})", at, what);
+          return false;
+        };
+        if (size < 8 || d[0] < 1 || d[0] > 3) return bad("unknown version");
+        const auto version = d[0];
+        const std::uint64_t name_size = little_endian(d + 2, 2),
+                            type_size = little_endian(d + 4, 2),
+                            space_size = little_endian(d + 6, 2);
+        const auto pad = [&](std::uint64_t n) { return version == 1 ? (n + 7) / 8 * 8 : n; };
+        const std::uint64_t start = 8 + (version == 3 ? 1 : 0);
+        const std::uint64_t type_at = start + pad(name_size), space_at = type_at + pad(type_size),
+                            value = space_at + pad(space_size);
+        if (value > size || type_size < 8 || space_size < 4) return bad("its parts overrun it");
+        // The value's size: the datatype's size × the dataspace's points (HDF5 copies that many bytes
+        // from the message). Dataspace version 1: dims from byte 8; version 2: from byte 4, type at 3.
+        const unsigned char* sp = d + space_at;
+        const unsigned rank = sp[1];
+        const std::uint64_t dims_at = sp[0] == 1 ? 8 : 4;
+        if ((sp[0] != 1 && sp[0] != 2) || dims_at + rank * raw.length_width() > space_size) {
+          return bad("its dataspace");
+        }
+        std::uint64_t points = sp[0] == 2 && sp[3] == 2 ? 0 : 1;  // version 2 type 2: null
+        for (unsigned r = 0; r < rank && points > 0; ++r) {
+          const auto dim = little_endian(sp + dims_at + r * raw.length_width(), raw.length_width());
+          if (dim > size) return bad("its dataspace");
+          points *= dim;
+          if (points > size) return bad("its dataspace");
+        }
+        const auto element = little_endian(d + type_at + 4, 4);
+        if (element > size || points * element > size - value) return bad("its value overruns it");
+        return true;
+      });
+  if (!damage.empty()) throw raw.fail(damage);
+}
+
 void check_global_heaps(hid_t obj, const std::string& file, const std::string& where,
                         const std::string& attribute) {
   RawFile raw(obj, file, where);
   // In an unchecksummed header, the attribute's own heap reference: length, collection, index.
   if (const auto header = header_address(obj)) {
     const auto found_attribute = v1_attribute(raw, *header, attribute);
+    if (found_attribute && found_attribute->damaged) {
+      throw raw.fail("its header message is damaged (its parts overrun the message)");
+    }
     if (found_attribute) check_vlen_string_type(raw, found_attribute->datatype);
     const auto value = found_attribute ? std::optional(found_attribute->value) : std::nullopt;
-    if (value && value->size() >= 4 + raw.addr_width() + 4) {
+    if (value && value->size() < 4 + raw.addr_width() + 4) {
+      throw raw.fail("its header message is damaged (too short for a string's heap reference)");
+    }
+    if (value) {
       const auto length = little_endian(value->data(), 4);
       const auto address = little_endian(value->data() + 4, raw.addr_width());
       const auto index = little_endian(value->data() + 4 + raw.addr_width(), 4);
