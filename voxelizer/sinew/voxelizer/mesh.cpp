@@ -320,19 +320,19 @@ TriangleMesh load_mesh(const std::filesystem::path& path, const MeshTransform& t
   if (scene->mRootNode != nullptr)
     collect(scene, scene->mRootNode, aiMatrix4x4(), mesh, missing_uvs);
   if (mesh.triangles.empty()) throw GeometryError(file, "", "the file contains no triangles");
-  if (missing_uvs == static_cast<std::int64_t>(mesh.triangles.size())) {
-    mesh.corner_uvs.clear();
-  } else if (missing_uvs > 0) {
-    log::info("{}: {} of {} triangles have no texture coordinates; none are kept", file,
+  // Texture coordinates are kept only when every triangle has finite ones: a mesh needs none to
+  // be voxelized, so damaged ones are dropped with a warning rather than refused.
+  std::int64_t bad_uvs = 0;
+  for (const auto& c : mesh.corner_uvs)
+    for (const auto& uv : c)
+      if (!std::isfinite(uv[0]) || !std::isfinite(uv[1])) ++bad_uvs;
+  if (missing_uvs > 0 && missing_uvs < static_cast<std::int64_t>(mesh.triangles.size())) {
+    log::warn("{}: {} of {} triangles have no texture coordinates; none are kept", file,
               missing_uvs, mesh.triangles.size());
-    mesh.corner_uvs.clear();
-  } else {
-    for (std::size_t t = 0; t < mesh.corner_uvs.size(); ++t)
-      for (const auto& c : mesh.corner_uvs[t])
-        if (!std::isfinite(c[0]) || !std::isfinite(c[1]))
-          throw GeometryError(file, "texture coordinates", "not finite (NaN or infinite)")
-              .at(static_cast<std::int64_t>(t));
+  } else if (missing_uvs == 0 && bad_uvs > 0) {
+    log::warn("{}: {} texture coordinates are not finite; none are kept", file, bad_uvs);
   }
+  if (missing_uvs > 0 || bad_uvs > 0) mesh.corner_uvs.clear();
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
     const Vec3d& v = mesh.vertices[i];
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
