@@ -239,6 +239,7 @@ void run(const Campaign& c, std::size_t cases) {
     const auto& base = c.seeds[m.below(c.seeds.size())];
     const auto input = c.binary ? m.binary(base) : m.text(base);
     write_file(c.file, input);
+    if (std::getenv("SINEW_FUZZ_KEEP_INPUT")) write_file(c.file + ".input", input);
     const auto t0 = std::chrono::steady_clock::now();
     ::alarm(kHangLimit);
     try {
@@ -288,6 +289,7 @@ class Fuzz : public ::testing::Test {
       chosen = "/dev/shm";
     }
     if (chosen) ::setenv("TMPDIR", chosen, 1);
+    if (std::getenv("SINEW_FUZZ_NO_FREE_LISTS")) H5set_free_list_limits(0, 0, 0, 0, 0, 0);
     spdlog::set_level(spdlog::level::off);  // the readers' warnings about odd but valid files
     dir_ = new simulator::testing::TempDir("fuzz");
     std::cout << "cases go to " << dir_->str() << std::endl;

@@ -215,12 +215,6 @@ TEST(LoadMesh, TextureCoordinatesFollowTheTriangleCorners) {
   clean_mesh(f, 0.0);
   EXPECT_EQ(uv_at(f, 1, {-1, -1, 0}), (std::array<double, 2>{0.75, 0.75}));
   EXPECT_EQ(uv_at(f, 1, {0, -1, 0}), (std::array<double, 2>{0.5, 1}));
-  // Texture coordinates that are not finite are dropped (a warning), the mesh is still read.
-  std::ofstream(dir.path / "nan_uv.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\n"
-                                            "f 1/1 2/2 3/1\n";
-  const TriangleMesh nan_uv = load_mesh(dir.path / "nan_uv.obj");
-  EXPECT_EQ(nan_uv.triangles.size(), 1u);
-  EXPECT_TRUE(nan_uv.corner_uvs.empty());
   // A file without texture coordinates has none.
   testing::write_obj(make_box({0, 0, 0}, {1, 1, 1}), dir.path / "box.obj");
   EXPECT_TRUE(load_mesh(dir.path / "box.obj").corner_uvs.empty());

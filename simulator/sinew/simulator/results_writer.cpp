@@ -193,6 +193,27 @@ std::unique_ptr<ResultsWriter> ResultsWriter::resume(const std::string& director
       new ResultsWriter(Resume{}, directory, model, std::move(options)));
   const auto& p = w->h5_path_;
   auto& impl = *w->impl_;
+  {
+    // Read-only first: a damaged file must be refused before it is opened for writing. HDF5 1.10
+    // can crash closing a writable file whose damaged metadata it acted on (freeing chunks at
+    // damaged addresses: a fuzz case), never a read-only one.
+    auto check = h5::open_file(p, false);
+    std::vector<h5::ChunkExtent> chunks;
+    const auto add = [&](const std::string& name) {
+      if (!h5::exists(check, name)) return;
+      auto extents = h5::chunk_extents(h5::open_dataset(check, name, p), p, name);
+      chunks.insert(chunks.end(), extents.begin(), extents.end());
+    };
+    for (const auto* name : {"/frames/time", "/frames/step", "/frames/displacement",
+                             "/frames/von_mises", "/frames/J", "/frames/energy_density"}) {
+      add(name);
+    }
+    for (auto s : w->visual_) {
+      add(surface_group(model.surfaces[s]) + "/positions");
+      add(surface_group(model.surfaces[s]) + "/displacement");
+    }
+    h5::check_disjoint(std::move(chunks), p);
+  }
   impl.file = h5::open_file(p, true);
   if (h5::string_attribute(impl.file, "format", p) != kResultsFormatName) {
     throw FormatError(p, "format", "not a sinew results file");
