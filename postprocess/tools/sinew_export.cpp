@@ -4,7 +4,7 @@
 //
 //   sinew-export RESULTS [--surface NAME] [--list] [--glb OUT.glb [--linear]]
 //                [--pc2 OUT.pc2 --rest-obj REST.obj] [--obj-sequence DIR] [--up y|z]
-//                [--fps F] [--time-scale S] [--color none|displacement]
+//                [--fps F] [--time-scale S] [--color none|displacement|von_mises]
 //
 // Timing (frame_timing.hpp): by default results frame k is frame k at F fps, F = 24 or 30 from the
 // scene's output rate; --time-scale S plays scene time × S instead, snapped to whole frames.
@@ -12,12 +12,14 @@
 // Exit status: 0 done, 1 bad input or I/O error, 2 bad command line.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
 #include "results_options.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/tool.hpp"
+#include "sinew/postprocess/element_fields.hpp"
 #include "sinew/postprocess/gltf_writer.hpp"
 #include "sinew/postprocess/pc2_writer.hpp"
 #include "sinew/postprocess/results_reader.hpp"
@@ -42,9 +44,9 @@ int main(int argc, char** argv) {
                  "results frame per frame)")
       ->check(CLI::PositiveNumber);
   app.add_option("--color", color,
-                 "Per-vertex colour: none or displacement (glTF COLOR_0 + _DISPLACEMENT of the "
-                 "peak |u|, OBJ sequence vertex colours of each frame's |u|)")
-      ->check(CLI::IsMember({"none", "displacement"}));
+                 "Per-vertex colour: none, displacement or von_mises (glTF COLOR_0 + _DISPLACEMENT "
+                 "/ _VON_MISES of the peak value, OBJ sequence vertex colours of each frame's)")
+      ->check(CLI::IsMember({"none", "displacement", "von_mises"}));
   app.add_flag("--linear", linear, "Interpolate linearly between frames (default: step)");
   auto* pc2_opt = app.add_option("--pc2", pc2, "Point Cache 2 file, one sample per frame");
   app.add_option("--rest-obj", rest_obj, "Rest-pose OBJ (the mesh the PC2 applies to)")
@@ -76,11 +78,22 @@ int main(int argc, char** argv) {
     }
     const auto vertex_scalar = parse_vertex_scalar(color);
     const auto anim = read_surface(results, surface);
-    std::printf("%s: surface \"%s\", %zu vertices, %zu triangles, %zu frames (t = %g .. %g s)\n",
+    std::printf("%s: surface \"%s\", %zu vertices, %zu triangles, %zu frames (t = %g .. %g s)%s\n",
                 results.c_str(), anim.name.c_str(), anim.vertex_count(), anim.triangle_count(),
-                anim.frame_count(), anim.times.front(), anim.times.back());
+                anim.frame_count(), anim.times.front(), anim.times.back(),
+                anim.has_uvs() ? ", texture coordinates" : "");
+    // Von Mises stress at the vertices: element values averaged to nodes and interpolated.
+    const auto color_values = vertex_scalar == VertexScalar::von_mises
+                                  ? element_field_at_vertices(results, anim, "/frames/von_mises")
+                                  : std::vector<std::vector<float>>{};
+    if (!color_values.empty()) {
+      float max = 0;
+      for (const float s : peak_over_frames(color_values)) max = std::max(max, s);
+      std::printf("von Mises stress at the surface: 0 .. %g Pa (viridis)\n", max);
+    }
     if (!glb.empty()) {
       GltfOptions o;
+      o.color_values = color_values;
       o.up = parse_up_axis(up);
       o.fps = fps;
       o.time_scale = time_scale;
@@ -95,14 +108,16 @@ int main(int argc, char** argv) {
     }
     if (!pc2.empty()) {
       write_pc2(pc2, anim);
+      ObjAttributes attributes = texture_attributes(anim);
+      attributes.normals = smooth_normals(anim.rest, anim.triangles);
       write_obj(rest_obj, anim.rest, anim.triangles,
                 "sinew surface " + anim.name + " rest pose (vertex order of " + pc2 + ")",
-                {.normals = smooth_normals(anim.rest, anim.triangles), .colors = {}});
+                attributes);
       std::printf("wrote %s (%zu samples, results frame k at frame k) and %s\n", pc2.c_str(),
                   anim.frame_count(), rest_obj.c_str());
     }
     if (!obj_dir.empty()) {
-      const auto paths = write_obj_sequence(obj_dir, anim, "frame", vertex_scalar);
+      const auto paths = write_obj_sequence(obj_dir, anim, "frame", vertex_scalar, color_values);
       std::printf("wrote %zu OBJ files into %s\n", paths.size(), obj_dir.c_str());
     }
     return tool::kExitOk;

@@ -3,6 +3,7 @@
 // each naming the file and the dataset or attribute path.
 #include "sinew/formats/hdf5_file.hpp"
 
+#include <chrono>
 #include <cstdint>
 #include <fstream>
 #include <string>
@@ -294,6 +295,74 @@ TEST(Hdf5File, DamagedAttributeReferenceInAnOldFormatHeader) {
   auto f = open_checked(damaged);
   EXPECT_CONTAINS(error_of<FormatError>([&] { string_attribute(f, "label", damaged); }),
                   damaged + ": /label: its heap reference (collection");
+}
+
+// In the earliest format a variable-length string's datatype (class 9, string, base type of
+// 1-byte characters) is not checksummed either: a base type size damaged to 2^30 made HDF5 1.10
+// allocate and clear 2^30 bytes per character (57 s for one attribute, a fuzz case). Both an
+// attribute's and a dataset's datatype are checked in the header and refused at once.
+TEST(Hdf5File, DamagedStringDatatypeInAnOldFormatHeader) {
+  const auto path = temp_path("old_types.h5");
+  {
+    Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    ASSERT_TRUE(f.valid());
+    set_attribute(f, "label", std::string("sinew-model"), path, StringKind::variable);
+    write_strings(f, "/names", {"skin", "skull"}, path);
+  }
+  auto b = file_bytes(path);
+  ASSERT_EQ(b.find("OHDR"), std::string::npos) << "not the earliest format";
+  {
+    auto f = open_checked(path);
+    EXPECT_EQ(string_attribute(f, "label", path), "sinew-model");
+    EXPECT_EQ(read_strings(f, "/names", path), (std::vector<std::string>{"skin", "skull"}));
+  }
+  // The vlen datatype's size (16) and then the base type: fixed-point, 1 byte, 8-bit precision.
+  const std::string base("\x10\0\0\0\x10\0\0\0\x01\0\0\0\0\0\x08\0", 16);
+  int patched = 0;
+  for (auto at = b.find(base); at != std::string::npos; at = b.find(base, at + 1), ++patched) {
+    b[at + 11] = static_cast<char>(0x40);  // base size 1 → 2^30 + 1
+  }
+  ASSERT_EQ(patched, 2) << "expected the attribute's and the dataset's datatype";
+  const auto damaged = temp_path("damaged_types.h5");
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+      .write(b.data(), static_cast<std::streamsize>(b.size()));
+  auto f = open_checked(damaged);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_CONTAINS(error_of<FormatError>([&] { string_attribute(f, "label", damaged); }),
+                  damaged +
+                      ": /label: its datatype is damaged (a variable-length string of "
+                      "1073741825-byte characters)");
+  EXPECT_CONTAINS(error_of<FormatError>([&] { read_strings(f, "/names", damaged); }),
+                  "/names: its datatype is damaged");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+}
+
+// An attribute message whose dataspace size has its high byte flipped (e.g. 4 → 46,084) puts the value past the
+// message's end: HDF5 1.10 copied the value from out of bounds when looking the attribute up (a
+// segfault in H5Aexists) or read a string descriptor out of other bytes and spent 21 s clearing a
+// conversion buffer for it (fuzz cases in the earliest format). Refused when the file is opened.
+TEST(Hdf5File, AttributeMessageOverrunInAnOldFormatHeader) {
+  const auto path = temp_path("old_overrun.h5");
+  {
+    Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    ASSERT_TRUE(f.valid());
+    set_attribute(f, "label", std::string("sinew-model"), path, StringKind::variable);
+  }
+  auto b = file_bytes(path);
+  const auto name = b.find(std::string("label\0", 6));
+  ASSERT_NE(name, std::string::npos);
+  ASSERT_EQ(b[name - 1], 0) << "the dataspace's size (a few bytes) ends before the name";
+  b[name - 1] = static_cast<char>(0xb4);  // its high byte: + 46,080 bytes
+  const auto damaged = temp_path("damaged_overrun.h5");
+  std::ofstream(damaged, std::ios::binary | std::ios::trunc)
+      .write(b.data(), static_cast<std::streamsize>(b.size()));
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto message = error_of<FormatError>([&] {
+    auto f = open_checked(damaged);
+    (void)string_attribute(f, "label", damaged);
+  });
+  EXPECT_CONTAINS(message, damaged + ": /: attribute message 0 of its header is damaged");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
 }
 
 // Files are written in the 1.8+ format, whose object headers carry checksums: a flipped byte in

@@ -150,7 +150,7 @@ TEST(Tools, H5pyReadsTheFile) {
     py << R"(import sys, h5py
 f = h5py.File(sys.argv[1], "r")
 assert f.attrs["format"] == "sinew-model", f.attrs["format"]
-assert int(f.attrs["format_version"]) == 1
+assert int(f.attrs["format_version"]) == 2
 assert list(f["materials/name"].asstr()[:]) == ["fat", "muscle_tissue"]
 assert list(f["surfaces/role"].asstr()[:]) == ["sliding", "visual"]
 assert f["elements/nodes"].shape == (36, 8) and str(f["elements/nodes"].dtype) == "int32"

@@ -136,6 +136,7 @@ TEST(ModelFile, EveryFeatureModelIsComplete) {
   EXPECT_EQ(m.surfaces[0].role, SurfaceRole::sliding);
   EXPECT_EQ(m.surfaces[1].role, SurfaceRole::visual);
   EXPECT_FALSE(m.surfaces[1].embedding_element.empty());
+  EXPECT_EQ(m.surfaces[1].uv_triangles.size(), m.surfaces[1].triangles.size());
   EXPECT_FALSE(m.provenance.inputs.empty());
   // Some element holds two materials, one is not full.
   bool two = false;
@@ -277,9 +278,44 @@ TEST_F(BrokenFile, NotHdf5) {
 }
 
 TEST_F(BrokenFile, WrongVersion) {
-  set_version_attribute(path_, 2);
+  set_version_attribute(path_, 3);
   EXPECT_CONTAINS(read_error(path_),
-                  "/format_version: unsupported format version 2 (this build reads version 1)");
+                  "/format_version: unsupported format version 3 (this build reads versions 1 to "
+                  "2)");
+  set_version_attribute(path_, 0);
+  EXPECT_CONTAINS(read_error(path_), "unsupported format version 0");
+}
+
+// A version 1 file (no texture coordinates) is still read: the same model without UVs.
+TEST_F(BrokenFile, VersionOneFileReadsWithoutTextureCoordinates) {
+  for (const char* d : {"/surfaces/uv_offsets", "/surfaces/uvs", "/surfaces/uv_triangle_offsets",
+                        "/surfaces/uv_triangles"}) {
+    delete_dataset(path_, d);
+  }
+  set_version_attribute(path_, 1);
+  Model expected = every_feature_model();
+  for (auto& s : expected.surfaces) {
+    s.uvs.clear();
+    s.uv_triangles.clear();
+  }
+  EXPECT_EQ(read_model(path_), expected);
+  // A version 2 file must have them.
+  set_version_attribute(path_, 2);
+  EXPECT_CONTAINS(read_error(path_), "/surfaces/uv_offsets");
+}
+
+TEST_F(BrokenFile, OutOfRangeTextureCorner) {
+  set_value<std::int32_t>(path_, "/surfaces/uv_triangles", 4, 20);  // skin triangle 1, corner 1
+  EXPECT_CONTAINS(read_error(path_),
+                  "/surfaces/uv_triangles[1]: surface 'skin': texture coordinate id 20 out of "
+                  "range [0, 20)");
+}
+
+TEST_F(BrokenFile, TextureOffsetsBeyondTheirRows) {
+  set_value<std::int64_t>(path_, "/surfaces/uv_offsets", 2, 21);
+  EXPECT_CONTAINS(read_error(path_),
+                  "/surfaces/uv_offsets[2]: last offset 21 differs from the 20 "
+                  "rows of /surfaces/uvs");
 }
 
 TEST_F(BrokenFile, NotASinewModel) {

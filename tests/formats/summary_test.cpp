@@ -67,7 +67,7 @@ TEST(Summary, TextNamesEverything) {
 TEST(Summary, JsonCarriesTheSameNumbers) {
   const auto j = nlohmann::json::parse(summary_json(summarize(testing::every_feature_model())));
   EXPECT_EQ(j["format"], "sinew-model");
-  EXPECT_EQ(j["format_version"], 1);
+  EXPECT_EQ(j["format_version"], 2);
   EXPECT_EQ(j["nodes"], 80);
   EXPECT_EQ(j["elements"], 36);
   EXPECT_EQ(j["grid"]["dims"], nlohmann::json::array({4, 3, 3}));

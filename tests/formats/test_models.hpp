@@ -88,6 +88,7 @@ inline Model every_feature_model() {
       const std::int32_t ei = std::min(i, nx - 1), ej = std::min(j, ny - 1);
       skin.embedding_element.push_back(ei + nx * (ej + ny * (nz - 1)));
       skin.embedding_local.push_back({i == ei ? -1.0 : 1.0, j == ej ? -1.0 : 1.0, 1.0});
+      skin.uvs.push_back({double(i) / nx, double(j) / ny});
     }
   }
   for (std::int32_t j = 0; j < ny; ++j) {
@@ -97,6 +98,7 @@ inline Model every_feature_model() {
       skin.triangles.push_back({a, c, d});
     }
   }
+  skin.uv_triangles = skin.triangles;  // texture coordinates: the top face mapped onto [0, 1]²
   m.surfaces.push_back(skin);
 
   m.node_sets.push_back(contact);

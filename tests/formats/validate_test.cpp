@@ -139,6 +139,19 @@ TEST(Validate, SurfacesAndConstraints) {
                  "/constraints/sliding_node", "sliding nodes not sorted and unique");
   expect_invalid([](Model& m) { m.sliding[2].rest_distance = -1e-3; },
                  "/constraints/sliding_rest_distance", "must be finite and >= 0");
+  // Texture coordinates (format version 2).
+  expect_invalid([](Model& m) { m.surfaces[1].uv_triangles.pop_back(); },
+                 "/surfaces/uv_triangle_offsets",
+                 "surface 'skin': 23 rows of texture corners for 24 triangles");
+  expect_invalid([](Model& m) { m.surfaces[1].uv_triangles[5][2] = 20; }, "/surfaces/uv_triangles",
+                 "surface 'skin': texture coordinate id 20 out of range [0, 20)");
+  expect_invalid([](Model& m) { m.surfaces[1].uvs[7][1] = std::nan(""); }, "/surfaces/uvs",
+                 "texture coordinate (0.5, nan) is not finite");
+  expect_invalid(
+      [](Model& m) {
+        m.surfaces[0].uvs = {{0.0, 0.0}};
+      },
+      "/surfaces/uv_offsets", "only visual surfaces carry texture coordinates");
   // Embedding on the boundary within the tolerance passes.
   Model m = testing::every_feature_model();
   m.surfaces[1].embedding_local[0][0] = -1.0 - 5e-10;

@@ -2,7 +2,7 @@
 // checkpoint written by sinew, a scene and a spec text) are mutated at random and fed, in this
 // process, to the readers the tools use. Every case must end in the reader's result or a typed
 // sinew error (FormatError, ConfigError, IoError, ...): a crash kills the test, an untyped
-// exception or a case slower than kCaseLimit fails it. docs/development.md, "Fuzzing", says how to
+// exception or a case slower than the case limit (5 s) fails it. docs/development.md, "Fuzzing", says how to
 // run longer campaigns (SINEW_FUZZ_SCALE, SINEW_FUZZ_SEED).
 //
 // Each case is written to a file before it is read (the readers take paths), so after a crash the
@@ -50,7 +50,13 @@ using formats::hdf5::Handle;
 // case 24952 of seed 1 once took 0.1 to 2 s in the sequence, and over 5 s on a loaded machine:
 // HDF5 re-read a damaged metadata block with sleeps between its read attempts; files are now
 // opened with one attempt (hdf5_file.cpp, read_access), and the slowest case takes 0.16 s.
-constexpr double kCaseLimit = 5.0;  // s
+// SINEW_FUZZ_CASE_LIMIT (s) sets another limit, e.g. a low one to collect the slowest cases of a
+// campaign (each slow case is saved beside case.* as case.*.slow-<i>, up to 5 per kind).
+double case_limit() {
+  const char* s = std::getenv("SINEW_FUZZ_CASE_LIMIT");
+  const double v = s ? std::atof(s) : 0.0;
+  return v > 0 ? v : 5.0;
+}
 
 // SINEW_FUZZ_SCALE multiplies every kind's case count (default 1: 100,000 cases in all);
 // SINEW_FUZZ_SEED picks another sequence of mutations (default 1); SINEW_FUZZ_DIR where the case
@@ -233,6 +239,7 @@ void run(const Campaign& c, std::size_t cases) {
     const auto& base = c.seeds[m.below(c.seeds.size())];
     const auto input = c.binary ? m.binary(base) : m.text(base);
     write_file(c.file, input);
+    if (std::getenv("SINEW_FUZZ_KEEP_INPUT")) write_file(c.file + ".input", input);
     const auto t0 = std::chrono::steady_clock::now();
     ::alarm(kHangLimit);
     try {
@@ -249,7 +256,7 @@ void run(const Campaign& c, std::size_t cases) {
       slowest = dt;
       slowest_case = i;
     }
-    if (dt > kCaseLimit && slow++ < 5) {
+    if (dt > case_limit() && slow++ < 5) {
       ADD_FAILURE() << c.kind << " case " << i << " took " << dt << " s";
       write_file(c.file + ".slow-" + std::to_string(i), input);
     }
@@ -282,6 +289,7 @@ class Fuzz : public ::testing::Test {
       chosen = "/dev/shm";
     }
     if (chosen) ::setenv("TMPDIR", chosen, 1);
+    if (std::getenv("SINEW_FUZZ_NO_FREE_LISTS")) H5set_free_list_limits(0, 0, 0, 0, 0, 0);
     spdlog::set_level(spdlog::level::off);  // the readers' warnings about odd but valid files
     dir_ = new simulator::testing::TempDir("fuzz");
     std::cout << "cases go to " << dir_->str() << std::endl;

@@ -1,7 +1,10 @@
-// The exports' timing (frame_timing), per-vertex attributes (vertex_attributes: normals, colours)
+// The exports' timing (frame_timing), per-vertex attributes (vertex_attributes: normals, colours;
+// element_fields: the von Mises stress carried from elements to vertices)
 // as written into glTF and OBJ files, and the temporary-name-then-rename writes (common/atomic_file.hpp).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,9 +16,11 @@
 #include "export_test_support.hpp"
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/postprocess/element_fields.hpp"
 #include "sinew/postprocess/frame_timing.hpp"
 #include "sinew/postprocess/gltf_writer.hpp"
 #include "sinew/postprocess/pc2_writer.hpp"
+#include "sinew/postprocess/rasterizer.hpp"
 #include "sinew/postprocess/vertex_attributes.hpp"
 
 namespace {
@@ -216,6 +221,142 @@ TEST(ExportOutputFile, WritesByRenameAndCleansUpAfterAnError) {
     EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
   }
   EXPECT_EQ(entries, 2u);  // a.glb and taken.glb/
+}
+
+// A results file of two unit elements along x (nodes (i, j, k), i = 0..2, id i + 3 (j + 2 k)),
+// two frames, von Mises 0 everywhere in frame 0 and (1, 3) Pa in elements (0, 1) in frame 1, and a
+// visual surface "skin" of three vertices embedded at known natural coordinates. With
+// `stress` false the file has no /frames/von_mises.
+void write_two_element_results(const std::string& path, bool stress = true) {
+  auto f = h5::create_file(path);
+  h5::set_attribute(f, "format", std::string(sinew::simulator::kResultsFormatName), path);
+  h5::set_attribute(f, "format_version", std::int64_t{sinew::simulator::kResultsFormatVersion},
+                    path);
+  for (const char* g : {"/mesh", "/frames", "/surfaces", "/surfaces/skin"})
+    h5::create_group(f, g, path);
+  std::vector<double> rest;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 3; ++i) rest.insert(rest.end(), {double(i), double(j), double(k)});
+  h5::write(f, "/mesh/rest_positions", {12, 3}, rest.data(), path);
+  std::vector<std::int32_t> conn;
+  for (int e = 0; e < 2; ++e)
+    for (const auto& c : {std::array<int, 3>{0, 0, 0},
+                          {1, 0, 0},
+                          {1, 1, 0},
+                          {0, 1, 0},
+                          {0, 0, 1},
+                          {1, 0, 1},
+                          {1, 1, 1},
+                          {0, 1, 1}})
+      conn.push_back(e + c[0] + 3 * (c[1] + 2 * c[2]));
+  h5::write(f, "/mesh/connectivity", {2, 8}, conn.data(), path);
+  const std::vector<double> times = {0.0, 0.01}, u(2 * 12 * 3, 0.0);
+  const std::vector<std::int64_t> steps = {0, 10};
+  h5::write(f, "/frames/time", {2}, times.data(), path);
+  h5::write(f, "/frames/step", {2}, steps.data(), path);
+  h5::write(f, "/frames/displacement", {2, 12, 3}, u.data(), path);
+  const std::vector<double> von_mises = {0.0, 0.0, 1.0, 3.0};
+  if (stress) h5::write(f, "/frames/von_mises", {2, 2}, von_mises.data(), path);
+  // Vertices: element 0's centre (x = 0.5), on the shared face (x = 1), at x = 1.75 in element 1.
+  const std::vector<double> x = {0.5, 0.5, 0.5, 1.0, 0.65, 0.4, 1.75, 1.0, 1.0};
+  std::vector<double> positions(x);
+  positions.insert(positions.end(), x.begin(), x.end());
+  h5::write(f, "/surfaces/skin/positions", {2, 3, 3}, positions.data(), path);
+  const std::vector<std::int32_t> tri = {0, 1, 2}, element = {0, 1, 1};
+  h5::write(f, "/surfaces/skin/triangles", {1, 3}, tri.data(), path);
+  h5::write(f, "/surfaces/skin/embedding_element", {3}, element.data(), path);
+  const std::vector<double> local = {0, 0, 0, -1, 0.3, -0.2, 0.5, 1, 1};
+  h5::write(f, "/surfaces/skin/embedding_local", {3, 3}, local.data(), path);
+}
+
+// Nodal averages (1 at x = 0, (1 + 3) / 2 = 2 at x = 1, 3 at x = 2) interpolated by the hex8
+// functions, linear in x here: 1.5, 2 and 2.75 Pa; frame 0 is zero.
+TEST(ExportElementFields, VonMisesIsNodeAveragedAndInterpolated) {
+  const auto dir = temp_dir("element_fields");
+  const auto path = (dir / "results.h5").string();
+  write_two_element_results(path);
+  const auto a = read_surface(path, "skin");
+  const auto s = element_field_at_vertices(path, a, "/frames/von_mises");
+  ASSERT_EQ(s.size(), 2u);
+  for (float v : s[0]) EXPECT_EQ(v, 0.0f);
+  ASSERT_EQ(s[1].size(), 3u);
+  EXPECT_NEAR(s[1][0], 1.5f, 1e-6);
+  EXPECT_NEAR(s[1][1], 2.0f, 1e-6);
+  EXPECT_NEAR(s[1][2], 2.75f, 1e-6);
+  // The volume's boundary: every node, its nodal average.
+  const auto v = read_surface(path, "volume");
+  const auto sv = element_field_at_vertices(path, v, "/frames/von_mises");
+  ASSERT_EQ(v.vertex_count(), 12u);
+  for (std::size_t i = 0; i < v.vertex_count(); ++i)
+    EXPECT_NEAR(sv[1][i], 1.0 + v.rest[3 * i], 1e-6) << "node at x = " << v.rest[3 * i];
+
+  // glTF: _VON_MISES holds the peak (frame 1), COLOR_0 viridis over [0, 2.75 Pa].
+  GltfOptions o;
+  o.color = VertexScalar::von_mises;
+  o.color_values = s;
+  const auto glb = dir / "stress.glb";
+  write_glb(glb.string(), a, o);
+  const auto bytes = slurp(glb);
+  const auto json_len = get<std::uint32_t>(bytes, 12);
+  const auto doc = nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_len);
+  const auto& attributes = doc["meshes"][0]["primitives"][0]["attributes"];
+  ASSERT_TRUE(attributes.contains("_VON_MISES"));
+  ASSERT_TRUE(attributes.contains("COLOR_0"));
+  const auto& acc = doc["accessors"][attributes["_VON_MISES"].get<int>()];
+  const auto& view = doc["bufferViews"][acc["bufferView"].get<int>()];
+  const std::size_t at = 20 + json_len + 8 + view["byteOffset"].get<std::size_t>();
+  EXPECT_NEAR(get<float>(bytes, at), 1.5f, 1e-6);
+  EXPECT_NEAR(get<float>(bytes, at + 8), 2.75f, 1e-6);
+  EXPECT_EQ(doc["materials"][0]["extras"]["unit"], "Pa");
+  EXPECT_NEAR(doc["materials"][0]["extras"]["max_pa"].get<double>(), 2.75, 1e-6);
+  // OBJ sequence: frame 1's vertex colours are viridis over [0, 2.75]: the last vertex at the top.
+  const auto paths =
+      write_obj_sequence((dir / "seq").string(), a, "frame", VertexScalar::von_mises, s);
+  ASSERT_EQ(paths.size(), 2u);
+  std::ifstream obj(paths[1]);
+  std::string line, last_v;
+  while (std::getline(obj, line))
+    if (line.rfind("v ", 0) == 0) last_v = line;
+  const Rgb top = map_color(ColorMap::viridis, 1.0);
+  EXPECT_NE(last_v.find(fmt::format("{:.4f} {:.4f} {:.4f}", top.r / 255.0f, top.g / 255.0f,
+                                    top.b / 255.0f)),
+            std::string::npos)
+      << last_v;
+}
+
+TEST(ExportElementFields, MissingStressOrEmbeddingIsAClearError) {
+  const auto dir = temp_dir("element_fields_missing");
+  const auto path = (dir / "results.h5").string();
+  write_two_element_results(path, false);
+  const auto a = read_surface(path, "skin");
+  try {
+    element_field_at_vertices(path, a, "/frames/von_mises");
+    ADD_FAILURE() << "no error without /frames/von_mises";
+  } catch (const sinew::FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("/frames/von_mises"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("output.fields including stress"), std::string::npos)
+        << e.what();
+  }
+  // A results file written before surfaces carried their embedding.
+  const auto old = (dir / "old.h5").string();
+  write_results(old, stretching_sphere(2));
+  {
+    auto f = h5::open_file(old, true);
+    const std::vector<double> zero(2, 0.0);
+    h5::write(f, "/frames/von_mises", {2, 1}, zero.data(), old);
+  }
+  const auto b = read_surface(old);
+  try {
+    element_field_at_vertices(old, b, "/frames/von_mises");
+    ADD_FAILURE() << "no error without the embedding";
+  } catch (const sinew::FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("/surfaces/skin/embedding_element"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("run the scene again"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_vertex_scalar("stress"), sinew::ConfigError);
+  EXPECT_EQ(parse_vertex_scalar("von_mises"), VertexScalar::von_mises);
 }
 
 }  // namespace

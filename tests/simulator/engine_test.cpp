@@ -285,5 +285,72 @@ TEST_P(EngineTest, ElementFieldsAndDominantMaterial) {
 
 INSTANTIATE_TEST_SUITE_P(Backends, EngineTest, ::testing::ValuesIn(kBackends), backend_name);
 
+// ---- Constraint work in the blow-up bound (docs/physics.md, "Instability") --------------------
+// On every backend (CUDA cases skip without a device).
+class ConstraintWork : public BackendTest<NamedBackend> {};
+
+// The sliding projection's work is the external work's: a bound node thrown at its surface stops
+// there in one step (an inelastic impact). Closed form: u(−1) = v Δt n (moving along −n at speed v),
+// the free update puts u* = −v Δt n, the projection returns it to 0, so the constraint force is
+// m v n / Δt and its work over the step, F · (u(1) − u(−1)) / 2, is −½ m v²: minus the kinetic
+// energy the node had. Undamped, unloaded: nothing else does work.
+TEST_P(ConstraintWork, SlidingProjectionWorkIsCounted) {
+  auto sc = sliding_scenario(4, 4, 2, false, false);
+  sc.setup.effects.damping = false;
+  sc.setup.effects.loads = false;
+  sc.setup.prescribed.clear();
+  // The bottom centre node sits straight above the sphere's centre: its normal is +z.
+  Index centre = -1;
+  for (auto n : sc.bottom) {
+    const auto x = sc.model.node_position(n);
+    if (std::abs(x[0]) < 1e-12 && std::abs(x[1]) < 1e-12) centre = n;
+  }
+  ASSERT_GE(centre, 0);
+  const double v = 0.2;  // m/s toward the sphere
+  sc.setup.initial_velocities.push_back({{centre}, {0, 0, -v}});
+  auto b = GetParam().make(sc.model, sc.setup);
+  const auto e0 = b->energies();
+  ASSERT_GT(e0.kinetic, 0);
+  EXPECT_EQ(e0.external_work, 0);
+  b->step(1);
+  const auto e1 = b->energies();
+  EXPECT_NEAR(e1.external_work, -e0.kinetic, 1e-9 * e0.kinetic)
+      << "the projection's work over the impact step";
+  EXPECT_LT(e1.kinetic, 1e-6 * e0.kinetic);  // the normal motion is gone
+  std::printf("[ measured ] %s: node stopped at its surface: KE %.6g J, projection work %.6g J\n",
+              GetParam().name.c_str(), e0.kinetic, e1.external_work);
+}
+
+// A real blow-up under constraints (sliding over the sphere, the top pulled by a prescribed
+// displacement) at the critical estimate h / c_d (above the true limit, physics-notes §4) is caught
+// at the same step as before the projections' work entered the bound (step 20, the third energy
+// check; measured on the CPU before the change: "kinetic energy blow-up at step 20, t =
+// 0.00360375 s: 2.9352e-06 J > 10 × 1.43955e-07 J ...; fastest node 98"), with the same message.
+TEST_P(ConstraintWork, BlowUpUnderConstraintsIsStillCaught) {
+  auto sc = sliding_scenario(6, 6, 2, false, false);
+  const auto probe = make_plan(sc.model, sc.setup);
+  sc.setup.time_step.policy = TimeStepPolicy::forced;
+  sc.setup.time_step.user_dt = probe.dt_critical;
+  auto b = GetParam().make(sc.model, sc.setup);
+  std::string message;
+  try {
+    b->step(2000);
+  } catch (const InstabilityError& e) {
+    message = e.what();
+  }
+  std::printf("[ measured ] %s: blow-up under constraints: %s\n", GetParam().name.c_str(),
+              message.c_str());
+  ASSERT_FALSE(message.empty()) << "no blow-up at the critical estimate";
+  EXPECT_NE(message.find("kinetic energy blow-up at step 20, t = 0.00360375 s"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("fastest node 98 (rest position (-0.003, -0.003, 0.0115) m"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("Lower the time step"), std::string::npos) << message;
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, ConstraintWork, ::testing::ValuesIn(every_backend()),
+                         backend_name);
+
 }  // namespace
 }  // namespace sinew::simulator::testing

@@ -29,6 +29,7 @@ namespace {
 using testing::read_file;
 using testing::small_box;
 using testing::TempDir;
+using testing::write_file;
 
 // ---- raw HDF5 reading (independent of the writer's helpers) ----
 
@@ -421,6 +422,50 @@ TEST(ResultsWriter, ResumeDropsFramesAfterTheCheckpoint) {
   ResultsOptions fewer = all_fields();
   fewer.stress = false;
   EXPECT_THROW(ResultsWriter::resume(dir.str(), model, fewer, 15), FormatError);
+}
+
+// A chunk address damaged to point into another series' chunk (one flipped byte in a fuzz case):
+// resuming would free it, and HDF5 1.10 crashed closing the file. The resume checks the series'
+// chunks read-only first and refuses the file, which stays as it was.
+TEST(ResultsWriter, ResumeRefusesOverlappingChunks) {
+  TempDir dir("results_resume_overlap");
+  const auto model = small_box(false, true);
+  {
+    ResultsWriter w(dir.str(), model, all_fields());
+    for (int f = 0; f < 3; ++f)
+      w.append_frame(0.1 * f, 10 * f, linear_field(model, f), fields_for(model, f));
+  }
+  const std::string path = dir / "results.h5";
+  const auto chunk_address = [&](const char* name, hsize_t index) {
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    const hid_t ds = H5Dopen2(f, name, H5P_DEFAULT);
+    const hid_t space = H5Dget_space(ds);
+    haddr_t addr = 0;
+    hsize_t size = 0;
+    EXPECT_GE(H5Dget_chunk_info(ds, space, index, nullptr, nullptr, &addr, &size), 0);
+    H5Sclose(space);
+    H5Dclose(ds);
+    H5Fclose(f);
+    return addr;
+  };
+  const haddr_t j = chunk_address("/frames/J", 2), v = chunk_address("/frames/von_mises", 2);
+  std::string bytes = read_file(path);
+  const auto le = [](haddr_t a) {
+    std::string out(8, '\0');
+    for (int k = 0; k < 8; ++k) out[std::size_t(k)] = char((a >> (8 * k)) & 0xff);
+    return out;
+  };
+  const auto at = bytes.find(le(j));
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, 8, le(v + 8));  // J's last chunk now starts inside von Mises' last one
+  write_file(path, bytes);
+  try {
+    ResultsWriter::resume(dir.str(), model, all_fields(), 15);
+    ADD_FAILURE() << "resumed a file with overlapping chunks";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("overlaps one of"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(read_file(path), bytes);  // not opened for writing
 }
 
 TEST(ResultsWriter, FrameViewsShowOneFrameEachAndFollowAResume) {

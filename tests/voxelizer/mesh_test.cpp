@@ -176,6 +176,50 @@ TEST(LoadMesh, BadInputGivesTypedErrors) {
   EXPECT_THROW(load_mesh(dir.path / "box.obj", zero), GeometryError);
 }
 
+// Texture coordinates ride on the triangle corners: a seam (one position, two (u, v)) stays one
+// vertex, each corner keeps its own (u, v) through a mirroring transform, cleaning (a degenerate
+// triangle dropped) and the indexed table the model file stores.
+TEST(LoadMesh, TextureCoordinatesFollowTheTriangleCorners) {
+  TempDir dir("sinew_mesh_test_uv");
+  // Two triangles sharing the edge 1-2 (seam: different vt on each side), and a degenerate one.
+  std::ofstream(dir.path / "seam.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                          "vt 0 0\nvt 0.5 0\nvt 0 0.5\nvt 0.75 0.75\n"
+                                          "vt 1 0.5\nvt 0.5 1\nvt 0.1 0.1\n"
+                                          "f 1/1 2/2 3/3\nf 2/5 4/4 3/6\nf 1/7 1/7 2/7\n";
+  TriangleMesh m = load_mesh(dir.path / "seam.obj");
+  ASSERT_EQ(m.vertices.size(), 4u);  // the seam's vertices are not split
+  ASSERT_EQ(m.corner_uvs.size(), m.triangles.size());
+  auto uv_at = [&](const TriangleMesh& mesh, std::size_t t, const Vec3d& p) {
+    for (int k = 0; k < 3; ++k)
+      if (norm(mesh.vertices[static_cast<std::size_t>(mesh.triangles[t][k])] - p) < 1e-12)
+        return mesh.corner_uvs[t][k];
+    ADD_FAILURE() << "triangle " << t << " has no corner at " << p.x << ' ' << p.y;
+    return std::array<double, 2>{-1, -1};
+  };
+  clean_mesh(m, 0.0);
+  ASSERT_EQ(m.triangles.size(), 2u);  // the degenerate one and its texture corners are gone
+  ASSERT_EQ(m.corner_uvs.size(), 2u);
+  EXPECT_EQ(uv_at(m, 0, {1, 0, 0}), (std::array<double, 2>{0.5, 0}));
+  EXPECT_EQ(uv_at(m, 1, {1, 0, 0}), (std::array<double, 2>{1, 0.5}));
+  EXPECT_EQ(uv_at(m, 1, {1, 1, 0}), (std::array<double, 2>{0.75, 0.75}));
+  const auto indexed = indexed_uvs(m);
+  EXPECT_EQ(indexed.uvs.size(), 6u);
+  ASSERT_EQ(indexed.triangles.size(), 2u);
+  for (std::size_t t = 0; t < 2; ++t)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(indexed.uvs[static_cast<std::size_t>(indexed.triangles[t][k])], m.corner_uvs[t][k]);
+  // A mirroring transform flips the triangles; each corner keeps its (u, v).
+  MeshTransform mirror;
+  mirror.scale = -1;
+  TriangleMesh f = load_mesh(dir.path / "seam.obj", mirror);
+  clean_mesh(f, 0.0);
+  EXPECT_EQ(uv_at(f, 1, {-1, -1, 0}), (std::array<double, 2>{0.75, 0.75}));
+  EXPECT_EQ(uv_at(f, 1, {0, -1, 0}), (std::array<double, 2>{0.5, 1}));
+  // A file without texture coordinates has none.
+  testing::write_obj(make_box({0, 0, 0}, {1, 1, 1}), dir.path / "box.obj");
+  EXPECT_TRUE(load_mesh(dir.path / "box.obj").corner_uvs.empty());
+}
+
 TEST(CleanMesh, WeldsSoupAndCountsEverything) {
   // The box as a soup (each triangle with its own corners), plus: a collinear triangle, a
   // triangle with a repeated corner, and an exact duplicate triangle.

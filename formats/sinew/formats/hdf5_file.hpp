@@ -137,6 +137,18 @@ template <typename T>
 void append(hid_t dataset, hsize_t frame, const T* data, const std::string& file,
             const std::string& name);
 // Shrinks or grows the first dimension to `frames`.
+// Where a chunked dataset's chunks lie in the file (bytes [address, address + size)); empty for
+// other layouts. FormatError when one lies past the file's end. A damaged chunk index would have
+// HDF5 free space it does not own when a series shrinks, and crash closing the file.
+struct ChunkExtent {
+  haddr_t address = 0;
+  hsize_t size = 0;
+  std::string dataset;
+};
+std::vector<ChunkExtent> chunk_extents(hid_t dataset, const std::string& file,
+                                       const std::string& name);
+// FormatError (naming both datasets) when two of the extents overlap.
+void check_disjoint(std::vector<ChunkExtent> extents, const std::string& file);
 void set_frames(hid_t dataset, hsize_t frames, const std::string& file, const std::string& name);
 
 // A virtual dataset (HDF5 VDS) `name` of shape (tail...) that shows frame `frame` of the series

@@ -111,6 +111,121 @@ std::optional<std::map<std::uint16_t, std::uint64_t>> collection_objects(RawFile
   return objects;
 }
 
+// The object header address of `obj`.
+std::optional<std::uint64_t> header_address(hid_t obj) {
+#if H5_VERSION_GE(1, 12, 0)
+  H5O_info2_t info;
+  haddr_t addr = HADDR_UNDEF;
+  if (H5Oget_info3(obj, &info, H5O_INFO_BASIC) < 0 ||
+      H5VLnative_token_to_addr(obj, info.token, &addr) < 0) {
+    return std::nullopt;
+  }
+#else
+  H5O_info_t info;
+  if (H5Oget_info2(obj, &info, H5O_INFO_BASIC) < 0) return std::nullopt;
+  const haddr_t addr = info.addr;
+#endif
+  if (addr == HADDR_UNDEF) return std::nullopt;
+  return addr;
+}
+
+// Calls visit(type, data, size) for every message of a version 1 object header (no checksum),
+// walking its continuation blocks; false when the header is version 2 (checksummed: HDF5 refuses
+// a damaged one) or cannot be walked.
+template <typename Visit>
+bool for_each_v1_message(RawFile& raw, std::uint64_t header, Visit visit) {
+  const auto prefix = raw.bytes(raw.base() + header, 16);
+  if (!prefix || (*prefix)[0] != 1) return false;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> blocks{
+      {raw.base() + header + 16, little_endian(prefix->data() + 8, 4)}};
+  for (std::size_t b = 0; b < blocks.size() && b < 64; ++b) {
+    const auto block = raw.bytes(blocks[b].first, blocks[b].second);
+    if (!block) return false;
+    for (std::size_t p = 0; p + 8 <= block->size();) {
+      const unsigned char* m = block->data() + p;
+      const auto type = little_endian(m, 2);
+      const auto size = little_endian(m + 2, 2);
+      if (p + 8 + size > block->size()) return false;
+      const unsigned char* d = m + 8;
+      if (type == 0x10 && size >= raw.addr_width() + raw.length_width()) {  // continuation
+        blocks.emplace_back(raw.base() + little_endian(d, raw.addr_width()),
+                            little_endian(d + raw.addr_width(), raw.length_width()));
+      } else if (!visit(type, d, static_cast<std::size_t>(size))) {
+        return true;
+      }
+      p += 8 + size;
+    }
+  }
+  return true;
+}
+
+// The datatype and the 16-byte-or-so value of attribute `name` as stored in a version 1 object
+// header; nothing when the header is version 2 or the attribute is not found there. `damaged`: the
+// message's own sizes put the value past its end, where HDF5 would read a descriptor out of other
+// bytes (a damaged dataspace size made one read take 21 s in a fuzz case).
+struct RawAttribute {
+  std::vector<unsigned char> datatype, value;
+  bool damaged = false;
+};
+std::optional<RawAttribute> v1_attribute(RawFile& raw, std::uint64_t header,
+                                         const std::string& name) {
+  std::optional<RawAttribute> out;
+  for_each_v1_message(
+      raw, header, [&](std::uint64_t type, const unsigned char* d, std::size_t size) {
+        if (type != 0x0C || size < 8 || d[0] < 1 || d[0] > 3) return true;  // not an attribute
+        const auto version = d[0];
+        const auto name_size = little_endian(d + 2, 2);
+        const auto type_size = little_endian(d + 4, 2);
+        const auto space_size = little_endian(d + 6, 2);
+        const auto pad = [&](std::uint64_t n) { return version == 1 ? (n + 7) / 8 * 8 : n; };
+        const std::uint64_t start = 8 + (version == 3 ? 1 : 0);
+        const auto type_at = start + pad(name_size);
+        const auto value = type_at + pad(type_size) + pad(space_size);
+        if (name_size != name.size() + 1 || start + name_size > size ||
+            std::memcmp(d + start, name.c_str(), name.size() + 1) != 0) {
+          return true;
+        }
+        out = RawAttribute{};
+        if (type_at + type_size > size || value > size) {
+          out->damaged = true;
+        } else {
+          out->datatype.assign(d + type_at, d + type_at + type_size);
+          out->value.assign(d + value, d + size);
+        }
+        return false;
+      });
+  return out;
+}
+
+// The datatype message of a dataset's version 1 object header; nothing otherwise.
+std::optional<std::vector<unsigned char>> v1_dataset_type(RawFile& raw, std::uint64_t header) {
+  std::optional<std::vector<unsigned char>> out;
+  for_each_v1_message(raw, header,
+                      [&](std::uint64_t type, const unsigned char* d, std::size_t size) {
+                        if (type != 0x03) return true;
+                        out = std::vector<unsigned char>(d, d + size);
+                        return false;
+                      });
+  return out;
+}
+
+// A variable-length string's stored datatype (HDF5 file format spec, "Datatype Message": class 9,
+// type 1 = string, then the base type) must have 1-byte characters. HDF5 1.10 takes the base
+// type's size as it is and, converting one string of n characters, allocates and clears n × that
+// size: a damaged size of 2^30 made one attribute read take 57 s (a fuzz case in the earliest
+// format). An empty optional (no unchecksummed header) passes.
+void check_vlen_string_type(const RawFile& raw,
+                            const std::optional<std::vector<unsigned char>>& type) {
+  if (!type || type->size() < 16) return;
+  const auto& t = *type;
+  if ((t[0] & 0x0f) != 9 || (t[1] & 0x0f) != 1) return;  // not a variable-length string
+  const auto base_size = little_endian(t.data() + 12, 4);
+  if (base_size != 1) {
+    throw raw.fail(fmt::format(
+        "its datatype is damaged (a variable-length string of {}-byte characters)", base_size));
+  }
+}
+
 }  // namespace
 
 void check_vlen_dataset(hid_t dataset, const std::string& file, const std::string& name) {
@@ -126,6 +241,9 @@ void check_vlen_dataset(hid_t dataset, const std::string& file, const std::strin
   const haddr_t offset = H5Dget_offset(dataset);
   if (offset == HADDR_UNDEF) return;  // no storage allocated: HDF5 reads fill values
   RawFile raw(dataset, file, name);
+  if (const auto header = header_address(dataset)) {
+    check_vlen_string_type(raw, v1_dataset_type(raw, *header));
+  }
   const std::uint64_t width = 4 + raw.addr_width() + 4;  // length, collection address, index
   const auto n = static_cast<std::uint64_t>(count);
   if (n > raw.size() / width) throw raw.fail("more strings than the file can hold");
@@ -157,76 +275,67 @@ void check_vlen_dataset(hid_t dataset, const std::string& file, const std::strin
   }
 }
 
-namespace {
-
-// The object header address of `obj`.
-std::optional<std::uint64_t> header_address(hid_t obj) {
-#if H5_VERSION_GE(1, 12, 0)
-  H5O_info2_t info;
-  haddr_t addr = HADDR_UNDEF;
-  if (H5Oget_info3(obj, &info, H5O_INFO_BASIC) < 0 ||
-      H5VLnative_token_to_addr(obj, info.token, &addr) < 0) {
-    return std::nullopt;
-  }
-#else
-  H5O_info_t info;
-  if (H5Oget_info2(obj, &info, H5O_INFO_BASIC) < 0) return std::nullopt;
-  const haddr_t addr = info.addr;
-#endif
-  if (addr == HADDR_UNDEF) return std::nullopt;
-  return addr;
-}
-
-// The 16-byte-or-so value of attribute `name` as stored in a version 1 object header (no
-// checksum), found by walking its messages and continuation blocks; nothing when the header is
-// version 2 (checksummed: HDF5 refuses a damaged one) or the attribute is not found there.
-std::optional<std::vector<unsigned char>> v1_attribute_value(RawFile& raw, std::uint64_t header,
-                                                             const std::string& name) {
-  const auto prefix = raw.bytes(raw.base() + header, 16);
-  if (!prefix || (*prefix)[0] != 1) return std::nullopt;
-  std::vector<std::pair<std::uint64_t, std::uint64_t>> blocks{
-      {raw.base() + header + 16, little_endian(prefix->data() + 8, 4)}};
-  for (std::size_t b = 0; b < blocks.size() && b < 64; ++b) {
-    const auto block = raw.bytes(blocks[b].first, blocks[b].second);
-    if (!block) return std::nullopt;
-    for (std::size_t p = 0; p + 8 <= block->size();) {
-      const unsigned char* m = block->data() + p;
-      const auto type = little_endian(m, 2);
-      const auto size = little_endian(m + 2, 2);
-      if (p + 8 + size > block->size()) return std::nullopt;
-      const unsigned char* d = m + 8;
-      if (type == 0x10 && size >= raw.addr_width() + raw.length_width()) {  // continuation
-        blocks.emplace_back(raw.base() + little_endian(d, raw.addr_width()),
-                            little_endian(d + raw.addr_width(), raw.length_width()));
-      } else if (type == 0x0C && size >= 8 && d[0] >= 1 && d[0] <= 3) {  // attribute
+void check_attribute_messages(hid_t obj, const std::string& file, const std::string& where) {
+  const auto header = header_address(obj);
+  if (!header) return;
+  RawFile raw(obj, file, where);
+  int index = 0;
+  std::string damage;
+  for_each_v1_message(
+      raw, *header, [&](std::uint64_t type, const unsigned char* d, std::size_t size) {
+        if (type != 0x0C) return true;
+        const int at = index++;
+        auto bad = [&](const std::string& what) {
+          damage = fmt::format("attribute message {} of its header is damaged ({})", at, what);
+          return false;
+        };
+        if (size < 8 || d[0] < 1 || d[0] > 3) return bad("unknown version");
         const auto version = d[0];
-        const auto name_size = little_endian(d + 2, 2);
-        const auto type_size = little_endian(d + 4, 2);
-        const auto space_size = little_endian(d + 6, 2);
+        const std::uint64_t name_size = little_endian(d + 2, 2),
+                            type_size = little_endian(d + 4, 2),
+                            space_size = little_endian(d + 6, 2);
         const auto pad = [&](std::uint64_t n) { return version == 1 ? (n + 7) / 8 * 8 : n; };
         const std::uint64_t start = 8 + (version == 3 ? 1 : 0);
-        const auto value = start + pad(name_size) + pad(type_size) + pad(space_size);
-        if (name_size == name.size() + 1 && start + name_size <= size &&
-            std::memcmp(d + start, name.c_str(), name.size() + 1) == 0) {
-          if (value > size) return std::nullopt;
-          return std::vector<unsigned char>(d + value, d + size);
+        const std::uint64_t type_at = start + pad(name_size), space_at = type_at + pad(type_size),
+                            value = space_at + pad(space_size);
+        if (value > size || type_size < 8 || space_size < 4) return bad("its parts overrun it");
+        // The value's size: the datatype's size × the dataspace's points (HDF5 copies that many bytes
+        // from the message). Dataspace version 1: dims from byte 8; version 2: from byte 4, type at 3.
+        const unsigned char* sp = d + space_at;
+        const unsigned rank = sp[1];
+        const std::uint64_t dims_at = sp[0] == 1 ? 8 : 4;
+        if ((sp[0] != 1 && sp[0] != 2) || dims_at + rank * raw.length_width() > space_size) {
+          return bad("its dataspace");
         }
-      }
-      p += 8 + size;
-    }
-  }
-  return std::nullopt;
+        std::uint64_t points = sp[0] == 2 && sp[3] == 2 ? 0 : 1;  // version 2 type 2: null
+        for (unsigned r = 0; r < rank && points > 0; ++r) {
+          const auto dim = little_endian(sp + dims_at + r * raw.length_width(), raw.length_width());
+          if (dim > size) return bad("its dataspace");
+          points *= dim;
+          if (points > size) return bad("its dataspace");
+        }
+        const auto element = little_endian(d + type_at + 4, 4);
+        if (element > size || points * element > size - value) return bad("its value overruns it");
+        return true;
+      });
+  if (!damage.empty()) throw raw.fail(damage);
 }
-
-}  // namespace
 
 void check_global_heaps(hid_t obj, const std::string& file, const std::string& where,
                         const std::string& attribute) {
   RawFile raw(obj, file, where);
   // In an unchecksummed header, the attribute's own heap reference: length, collection, index.
   if (const auto header = header_address(obj)) {
-    const auto value = v1_attribute_value(raw, *header, attribute);
-    if (value && value->size() >= 4 + raw.addr_width() + 4) {
+    const auto found_attribute = v1_attribute(raw, *header, attribute);
+    if (found_attribute && found_attribute->damaged) {
+      throw raw.fail("its header message is damaged (its parts overrun the message)");
+    }
+    if (found_attribute) check_vlen_string_type(raw, found_attribute->datatype);
+    const auto value = found_attribute ? std::optional(found_attribute->value) : std::nullopt;
+    if (value && value->size() < 4 + raw.addr_width() + 4) {
+      throw raw.fail("its header message is damaged (too short for a string's heap reference)");
+    }
+    if (value) {
       const auto length = little_endian(value->data(), 4);
       const auto address = little_endian(value->data() + 4, raw.addr_width());
       const auto index = little_endian(value->data() + 4 + raw.addr_width(), 4);

@@ -30,4 +30,12 @@ void check_vlen_dataset(hid_t dataset, const std::string& file, const std::strin
 void check_global_heaps(hid_t obj, const std::string& file, const std::string& where,
                         const std::string& attribute);
 
+// Before HDF5 looks at any attribute of `obj` (H5Aexists and H5Aopen decode every attribute
+// message of its header): when the header is version 1 (no checksum), every attribute message's
+// parts (name, datatype, dataspace, value = the datatype's size × the dataspace's points) must fit
+// inside the message. HDF5 1.10 copies the value from where the sizes say, out of bounds when
+// they are damaged (fuzz cases: a segfault in H5Aexists, or 21 s clearing a buffer for a
+// descriptor read from other bytes). FormatError naming `where` otherwise.
+void check_attribute_messages(hid_t obj, const std::string& file, const std::string& where);
+
 }  // namespace sinew::formats::hdf5

@@ -1,5 +1,6 @@
 #pragma once
-// The in-memory form of a sinew model file (format version 1). docs/model-format.md documents the
+// The in-memory form of a sinew model file (format version 2; version 1 files, which have no
+// texture coordinates, are still read). docs/model-format.md documents the
 // file dataset by dataset; this struct mirrors it one to one. SI units throughout: metres,
 // kilograms, seconds, pascals.
 //
@@ -22,21 +23,26 @@
 
 namespace sinew::formats {
 
-inline constexpr int kModelFormatVersion = 1;
+inline constexpr int kModelFormatVersion = 2;
+// The oldest version the reader accepts: version 1 lacks the surfaces' texture coordinates.
+inline constexpr int kModelFormatOldestVersion = 1;
 inline constexpr const char* kModelFormatName = "sinew-model";
 
-using Index = std::int32_t;        // node, element, triangle, material ids
-using Offset = std::int64_t;       // CSR offsets
+using Index = std::int32_t;   // node, element, triangle, material ids
+using Offset = std::int64_t;  // CSR offsets
 using Lattice = std::array<std::int32_t, 3>;
 using Point = std::array<double, 3>;
+// Texture coordinates (u, v) in OBJ's (and assimp's) convention: (0, 0) is the image's bottom-left
+// corner, v grows upward. glTF puts (0, 0) at the top-left: its exporter writes (u, 1 − v).
+using TexCoord = std::array<double, 2>;
 
 // Natural-coordinate offsets (di, dj, dk) of the 8 element nodes in hex8 order.
-inline constexpr std::array<std::array<int, 3>, 8> kHexCorner = {{
-    {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
+inline constexpr std::array<std::array<int, 3>, 8> kHexCorner = {
+    {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
 
 struct VoxelGrid {
-  Point origin{0, 0, 0};                 // m, position of lattice point (0,0,0)
-  double voxel_size = 0;                 // m, side of every (cubic) voxel
+  Point origin{0, 0, 0};                      // m, position of lattice point (0,0,0)
+  double voxel_size = 0;                      // m, side of every (cubic) voxel
   std::array<std::int32_t, 3> dims{0, 0, 0};  // voxels along x, y, z
   bool operator==(const VoxelGrid&) const = default;
 };
@@ -50,11 +56,11 @@ MaterialLaw material_law_from_string(const std::string& name);
 struct Material {
   std::string name;
   MaterialLaw law = MaterialLaw::neo_hookean_tled;
-  double youngs_modulus = 0;   // Pa
-  double poisson_ratio = 0;    // 1
-  double shear_modulus = 0;    // Pa, μ = E / (2(1+ν))
-  double bulk_modulus = 0;     // Pa, κ = E / (3(1−2ν))
-  double density = 0;          // kg/m³
+  double youngs_modulus = 0;  // Pa
+  double poisson_ratio = 0;   // 1
+  double shear_modulus = 0;   // Pa, μ = E / (2(1+ν))
+  double bulk_modulus = 0;    // Pa, κ = E / (3(1−2ν))
+  double density = 0;         // kg/m³
   bool operator==(const Material&) const = default;
 };
 
@@ -83,11 +89,11 @@ ForceLengthCurve force_length_curve_from_string(const std::string& name);
 
 struct Muscle {
   std::string name;
-  Index material = -1;               // its passive isotropic tissue, an index into materials
-  double reference_stress = 5e6;     // Pa, σref
-  double optimal_stretch = 1.0;      // λopt
+  Index material = -1;            // its passive isotropic tissue, an index into materials
+  double reference_stress = 5e6;  // Pa, σref
+  double optimal_stretch = 1.0;   // λopt
   ForceLengthCurve force_length = ForceLengthCurve::blemker2005;
-  double passive_p1 = 0.05;          // fp(x) = p1 (exp(p2 (x−1)) − 1) for 1 < x < x*
+  double passive_p1 = 0.05;  // fp(x) = p1 (exp(p2 (x−1)) − 1) for 1 < x < x*
   double passive_p2 = 6.6;
   double passive_linear_stretch = 1.4;  // x*, linear continuation beyond it
   // Per element: the elements this muscle overlaps, its volume fraction there and the unit fibre
@@ -105,12 +111,18 @@ SurfaceRole surface_role_from_string(const std::string& name);
 struct Surface {
   std::string name;
   SurfaceRole role = SurfaceRole::visual;
-  std::vector<Point> vertices;                 // m
-  std::vector<std::array<Index, 3>> triangles; // counter-clockwise seen from outside
+  std::vector<Point> vertices;                  // m
+  std::vector<std::array<Index, 3>> triangles;  // counter-clockwise seen from outside
   // Visual surfaces only (empty otherwise): per vertex the element that holds it and its natural
   // coordinates (ξ, η, ζ) ∈ [−1, 1]³ in that element.
   std::vector<Index> embedding_element;
   std::vector<Point> embedding_local;
+  // Visual surfaces only, optional: the artist's texture coordinates, indexed per triangle corner
+  // (as in OBJ's `f v/vt`): uv_triangles is empty (no UVs) or has one row per triangle, whose
+  // corner k has coordinates uvs[uv_triangles[t][k]]. Per corner because one position can carry
+  // several (u, v) along a texture seam. Finite; any range (textures may repeat).
+  std::vector<TexCoord> uvs;
+  std::vector<std::array<Index, 3>> uv_triangles;
   bool operator==(const Surface&) const = default;
 };
 
@@ -124,41 +136,41 @@ struct SlidingBinding {
 
 struct NamedSet {
   std::string name;
-  std::vector<Index> ids;    // sorted, unique
+  std::vector<Index> ids;  // sorted, unique
   bool operator==(const NamedSet&) const = default;
 };
 
 struct InputFile {
   std::string path;
-  std::string sha256;        // lowercase hex
+  std::string sha256;  // lowercase hex
   bool operator==(const InputFile&) const = default;
 };
 
 struct Provenance {
-  std::string tool;            // e.g. "sinew-voxelize"
+  std::string tool;  // e.g. "sinew-voxelize"
   std::string tool_version;
-  std::string created;         // ISO 8601 UTC, e.g. 2026-11-21T06:49:00Z
+  std::string created;  // ISO 8601 UTC, e.g. 2026-11-21T06:49:00Z
   std::vector<InputFile> inputs;
-  std::string parameters_json; // every parameter used, as one JSON document
+  std::string parameters_json;  // every parameter used, as one JSON document
   bool operator==(const Provenance&) const = default;
 };
 
 struct Model {
   VoxelGrid grid;
-  std::vector<Lattice> node_lattice;          // N, lattice coordinates of present nodes
-  std::vector<Lattice> element_lattice;       // E, base corner of present elements
+  std::vector<Lattice> node_lattice;                // N, lattice coordinates of present nodes
+  std::vector<Lattice> element_lattice;             // E, base corner of present elements
   std::vector<std::array<Index, 8>> element_nodes;  // E × 8, hex8 order (see above)
 
   std::vector<Material> materials;
   // Element material fractions, CSR over elements: the entries of element e are
   // [material_offsets[e], material_offsets[e+1]). Sum per element = tissue fraction ≤ 1.
-  std::vector<Offset> material_offsets;       // E + 1
-  std::vector<Index> material_ids;            // K
-  std::vector<double> material_fractions;     // K, in (0, 1]
+  std::vector<Offset> material_offsets;    // E + 1
+  std::vector<Index> material_ids;         // K
+  std::vector<double> material_fractions;  // K, in (0, 1]
 
   std::vector<Muscle> muscles;
-  std::vector<Index> rigid_nodes;             // sorted, unique
-  std::vector<SlidingBinding> sliding;        // sorted by node, one binding per node
+  std::vector<Index> rigid_nodes;       // sorted, unique
+  std::vector<SlidingBinding> sliding;  // sorted by node, one binding per node
   std::vector<Surface> surfaces;
   std::vector<NamedSet> node_sets;
   std::vector<NamedSet> element_sets;

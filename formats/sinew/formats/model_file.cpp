@@ -20,6 +20,7 @@ static_assert(sizeof(Lattice) == 3 * sizeof(std::int32_t), "Lattice must be thre
 static_assert(sizeof(Point) == 3 * sizeof(double), "Point must be three packed doubles");
 static_assert(sizeof(std::array<Index, 8>) == 8 * sizeof(Index), "hex8 node rows must be packed");
 static_assert(sizeof(std::array<Index, 3>) == 3 * sizeof(Index), "triangles must be packed");
+static_assert(sizeof(TexCoord) == 2 * sizeof(double), "texture coordinates must be packed");
 
 namespace {
 
@@ -159,18 +160,23 @@ void write_all(Writer& w, const Model& m) {
   w.strings("/surfaces/name", column(su, [](const Surface& x) { return x.name; }));
   w.strings("/surfaces/role",
             column(su, [](const Surface& x) { return std::string(to_string(x.role)); }));
-  std::vector<Offset> v_off{0}, t_off{0}, e_off{0};
+  std::vector<Offset> v_off{0}, t_off{0}, e_off{0}, uv_off{0}, uvt_off{0};
   std::vector<Point> vertices, local;
-  std::vector<std::array<Index, 3>> triangles;
+  std::vector<std::array<Index, 3>> triangles, uv_triangles;
   std::vector<Index> emb_element;
+  std::vector<TexCoord> uvs;
   for (const auto& s : su) {
     vertices.insert(vertices.end(), s.vertices.begin(), s.vertices.end());
     triangles.insert(triangles.end(), s.triangles.begin(), s.triangles.end());
     emb_element.insert(emb_element.end(), s.embedding_element.begin(), s.embedding_element.end());
     local.insert(local.end(), s.embedding_local.begin(), s.embedding_local.end());
+    uvs.insert(uvs.end(), s.uvs.begin(), s.uvs.end());
+    uv_triangles.insert(uv_triangles.end(), s.uv_triangles.begin(), s.uv_triangles.end());
     v_off.push_back(static_cast<Offset>(vertices.size()));
     t_off.push_back(static_cast<Offset>(triangles.size()));
     e_off.push_back(static_cast<Offset>(emb_element.size()));
+    uv_off.push_back(static_cast<Offset>(uvs.size()));
+    uvt_off.push_back(static_cast<Offset>(uv_triangles.size()));
   }
   w.array("/surfaces/vertex_offsets", v_off);
   w.array("/surfaces/vertices", vertices.empty() ? nullptr : vertices.front().data(),
@@ -182,6 +188,12 @@ void write_all(Writer& w, const Model& m) {
   w.array("/surfaces/embedding_element", emb_element);
   w.array("/surfaces/embedding_local", local.empty() ? nullptr : local.front().data(),
           static_cast<std::int64_t>(local.size()), 3);
+  w.array("/surfaces/uv_offsets", uv_off);
+  w.array("/surfaces/uvs", uvs.empty() ? nullptr : uvs.front().data(),
+          static_cast<std::int64_t>(uvs.size()), 2);
+  w.array("/surfaces/uv_triangle_offsets", uvt_off);
+  w.array("/surfaces/uv_triangles", uv_triangles.empty() ? nullptr : uv_triangles.front().data(),
+          static_cast<std::int64_t>(uv_triangles.size()), 3);
 
   w.group("/node_sets", true);
   for (const auto& s : m.node_sets) w.array("/node_sets/" + s.name, s.ids);
@@ -218,8 +230,9 @@ class Reader {
 
   void open() { file_ = hdf5::open_checked(path_); }
 
-  // Checks the root attributes `format` and `format_version`.
-  void check_format() {
+  // Checks the root attributes `format` and `format_version`; returns the version (one of
+  // kModelFormatOldestVersion ... kModelFormatVersion).
+  int check_format() {
     const auto require = [&](const char* name) {
       if (!hdf5::has_attribute(file_, name)) {
         fail(std::string("/") + name, "missing root attribute (not a sinew model file?)");
@@ -236,11 +249,12 @@ class Reader {
     }
     require("format_version");
     const std::int64_t version = hdf5::int_attribute(file_, "format_version", path_);
-    if (version != kModelFormatVersion) {
+    if (version < kModelFormatOldestVersion || version > kModelFormatVersion) {
       fail("/format_version",
-           fmt::format("unsupported format version {} (this build reads version {})", version,
-                       kModelFormatVersion));
+           fmt::format("unsupported format version {} (this build reads versions {} to {})",
+                       version, kModelFormatOldestVersion, kModelFormatVersion));
     }
+    return static_cast<int>(version);
   }
 
   // 1-D array (cols == 0) or rows × cols array, flattened.
@@ -308,7 +322,7 @@ std::vector<std::array<T, C>> rows_of(const std::vector<T>& flat) {
   return out;
 }
 
-Model read_all(Reader& r) {
+Model read_all(Reader& r, int version) {
   Model m;
   {
     const auto origin = r.fixed<double>("/grid/origin", 3);
@@ -469,6 +483,20 @@ Model read_all(Reader& r) {
       s.embedding_local = slice(emb_local, e_off, i);
       m.surfaces.push_back(std::move(s));
     }
+    // Texture coordinates: since version 2 (a version 1 surface has none).
+    if (version >= 2) {
+      const auto uv_off = r.array<std::int64_t>("/surfaces/uv_offsets");
+      const auto uvs = rows_of<2>(r.array<double>("/surfaces/uvs", 2));
+      const auto uvt_off = r.array<std::int64_t>("/surfaces/uv_triangle_offsets");
+      const auto uv_triangles = rows_of<3>(r.array<std::int32_t>("/surfaces/uv_triangles", 3));
+      check_offsets(r, "/surfaces/uv_offsets", uv_off, n, uvs.size(), "/surfaces/uvs");
+      check_offsets(r, "/surfaces/uv_triangle_offsets", uvt_off, n, uv_triangles.size(),
+                    "/surfaces/uv_triangles");
+      for (std::size_t i = 0; i < n; ++i) {
+        m.surfaces[i].uvs = slice(uvs, uv_off, i);
+        m.surfaces[i].uv_triangles = slice(uv_triangles, uvt_off, i);
+      }
+    }
   }
 
   for (const auto& name : r.members("/node_sets")) {
@@ -507,8 +535,8 @@ void write_model(const Model& model, const std::string& path) {
 Model read_model(const std::string& path) {
   Reader r(path);
   r.open();
-  r.check_format();
-  Model m = read_all(r);
+  const int version = r.check_format();
+  Model m = read_all(r, version);
   validate_model(m, path);
   return m;
 }

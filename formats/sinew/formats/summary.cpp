@@ -46,9 +46,9 @@ ModelSummary summarize(const Model& m) {
   s.rigid_nodes = m.rigid_nodes.size();
   s.sliding_nodes = m.sliding.size();
   for (const auto& sf : m.surfaces) {
-    s.surfaces.push_back(
-        {sf.name, sf.role, sf.vertices.size(), sf.triangles.size(), 0,
-         !sf.vertices.empty() && sf.embedding_element.size() == sf.vertices.size()});
+    s.surfaces.push_back({sf.name, sf.role, sf.vertices.size(), sf.triangles.size(), 0,
+                          !sf.vertices.empty() && sf.embedding_element.size() == sf.vertices.size(),
+                          sf.uvs.size()});
   }
   for (const auto& b : m.sliding) ++s.surfaces[static_cast<std::size_t>(b.surface)].sliding_nodes;
   for (const auto& set : m.node_sets) s.node_sets.push_back({set.name, set.ids.size()});
@@ -89,6 +89,7 @@ std::string summary_text(const ModelSummary& s) {
     if (sf.role == SurfaceRole::sliding)
       extra = fmt::format(", {} sliding nodes", sf.sliding_nodes);
     if (sf.embedded) extra = ", embedded";
+    if (sf.uvs > 0) extra += fmt::format(", {} texture coordinates", sf.uvs);
     line(fmt::format("  {} ({}): {} vertices, {} triangles{}", sf.name, to_string(sf.role),
                      sf.vertices, sf.triangles, extra));
   }
@@ -143,7 +144,8 @@ std::string summary_json(const ModelSummary& s) {
                         {"vertices", sf.vertices},
                         {"triangles", sf.triangles},
                         {"sliding_nodes", sf.sliding_nodes},
-                        {"embedded", sf.embedded}});
+                        {"embedded", sf.embedded},
+                        {"uvs", sf.uvs}});
   }
   j["surfaces"] = surfaces;
   auto sets = [](const std::vector<ModelSummary::SetInfo>& v) {

@@ -22,6 +22,7 @@ struct ModelSummary {
     std::size_t vertices = 0, triangles = 0;
     std::size_t sliding_nodes = 0;  // sliding bindings onto this surface
     bool embedded = false;          // every vertex has an element and local coordinates
+    std::size_t uvs = 0;            // texture coordinates (0: the surface has none)
   };
   struct SetInfo {
     std::string name;

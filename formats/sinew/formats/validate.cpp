@@ -301,7 +301,7 @@ class Validator {
 
   void surfaces() {
     std::set<std::string> names;
-    std::int64_t v_flat = 0, t_flat = 0, emb_flat = 0;
+    std::int64_t v_flat = 0, t_flat = 0, emb_flat = 0, uv_flat = 0, uvt_flat = 0;
     const std::size_t e_count = m_.element_count();
     for (std::size_t s = 0; s < m_.surfaces.size(); ++s) {
       const auto& sf = m_.surfaces[s];
@@ -363,8 +363,45 @@ class Validator {
              who + "only visual surfaces carry an embedding, this one has role " +
                  to_string(sf.role));
       }
+      texture_coordinates(sf, idx, who, uv_flat, uvt_flat);
       v_flat += static_cast<std::int64_t>(sf.vertices.size());
       t_flat += static_cast<std::int64_t>(sf.triangles.size());
+      uv_flat += static_cast<std::int64_t>(sf.uvs.size());
+      uvt_flat += static_cast<std::int64_t>(sf.uv_triangles.size());
+    }
+  }
+
+  // A surface's optional texture coordinates: visual surfaces only, none or one row of corner ids
+  // per triangle, each id in range, every (u, v) finite. uv_flat, uvt_flat: rows of the surfaces
+  // before this one in /surfaces/uvs and /surfaces/uv_triangles.
+  void texture_coordinates(const Surface& sf, std::int64_t idx, const std::string& who,
+                           std::int64_t uv_flat, std::int64_t uvt_flat) {
+    if (sf.uvs.empty() && sf.uv_triangles.empty()) return;
+    if (sf.role != SurfaceRole::visual) {
+      fail("/surfaces/uv_offsets", idx,
+           who + "only visual surfaces carry texture coordinates, this one has role " +
+               to_string(sf.role));
+    }
+    if (sf.uv_triangles.size() != sf.triangles.size()) {
+      fail("/surfaces/uv_triangle_offsets", idx,
+           fmt::format("{}{} rows of texture corners for {} triangles (one per triangle expected)",
+                       who, sf.uv_triangles.size(), sf.triangles.size()));
+    }
+    for (std::size_t i = 0; i < sf.uvs.size(); ++i) {
+      const TexCoord& uv = sf.uvs[i];
+      if (!std::isfinite(uv[0]) || !std::isfinite(uv[1])) {
+        fail("/surfaces/uvs", uv_flat + static_cast<std::int64_t>(i),
+             fmt::format("{}texture coordinate ({}, {}) is not finite", who, uv[0], uv[1]));
+      }
+    }
+    for (std::size_t t = 0; t < sf.uv_triangles.size(); ++t) {
+      for (const Index k : sf.uv_triangles[t]) {
+        if (k < 0 || static_cast<std::size_t>(k) >= sf.uvs.size()) {
+          fail("/surfaces/uv_triangles", uvt_flat + static_cast<std::int64_t>(t),
+               fmt::format("{}texture coordinate id {} out of range [0, {})", who, k,
+                           sf.uvs.size()));
+        }
+      }
     }
   }
 

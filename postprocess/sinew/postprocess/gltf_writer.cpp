@@ -82,7 +82,13 @@ int vec3_accessor(Builder& b, const std::vector<float>& p, std::size_t count,
 FrameTiming write_glb(const std::string& path, const SurfaceAnimation& a, const GltfOptions& o) {
   validate(a);
   const auto timing = frame_timing(a.times, {.fps = o.fps, .time_scale = o.time_scale});
-  const std::size_t nv = a.vertex_count(), nf = a.frame_count();
+  // Vertices split at texture seams (identity without UVs); per-vertex data is computed on the
+  // surface and copied to its split vertices (`out`).
+  const SeamSplit split = split_at_seams(a);
+  const std::size_t nv = split.vertex.size(), nf = a.frame_count();
+  auto out = [&](const std::vector<float>& v, std::size_t width) {
+    return gather_rows(v, width, split.vertex);
+  };
   auto turn = [&](std::vector<float> p) {
     if (o.up == UpAxis::z) {
       for (std::size_t i = 0; i + 2 < p.size(); i += 3) {
@@ -99,32 +105,57 @@ FrameTiming write_glb(const std::string& path, const SurfaceAnimation& a, const 
   const auto rest_normals = smooth_normals(rest, a.triangles, {0.0f, 1.0f, 0.0f});
 
   Builder b;
-  std::vector<std::uint32_t> indices(a.triangles.begin(), a.triangles.end());
+  std::vector<std::uint32_t> indices(split.triangles.begin(), split.triangles.end());
   const int idx_view = b.view(indices.data(), indices.size() * 4, kElementArrayBuffer);
   const int idx_acc = b.accessor({{"bufferView", idx_view},
                                   {"byteOffset", 0},
                                   {"componentType", kUnsignedInt},
                                   {"count", indices.size()},
                                   {"type", "SCALAR"}});
-  nlohmann::json attributes = {{"POSITION", vec3_accessor(b, rest, nv)},
-                               {"NORMAL", vec3_accessor(b, rest_normals, nv, false)}};
+  nlohmann::json attributes = {{"POSITION", vec3_accessor(b, out(rest, 3), nv)},
+                               {"NORMAL", vec3_accessor(b, out(rest_normals, 3), nv, false)}};
+  if (a.has_uvs()) {
+    // glTF's texture origin is the image's top-left corner, OBJ's (stored) the bottom-left.
+    std::vector<float> uv(2 * nv);
+    for (std::size_t i = 0; i < nv; ++i) {
+      const auto q = static_cast<std::size_t>(split.uv[i]);
+      uv[2 * i] = a.uvs[2 * q];
+      uv[2 * i + 1] = 1.0f - a.uvs[2 * q + 1];
+    }
+    const int view = b.view(uv.data(), uv.size() * 4, kArrayBuffer);
+    attributes["TEXCOORD_0"] = b.accessor({{"bufferView", view},
+                                           {"byteOffset", 0},
+                                           {"componentType", kFloat},
+                                           {"count", nv},
+                                           {"type", "VEC2"}});
+  }
   nlohmann::json material = {{"name", "skin"},
                              {"pbrMetallicRoughness",
                               {{"baseColorFactor", {0.84, 0.69, 0.59, 1.0}},
                                {"metallicFactor", 0.0},
                                {"roughnessFactor", 0.6}}}};
-  if (o.color == VertexScalar::displacement) {
-    const auto peak = peak_displacement(a);
+  if (o.color != VertexScalar::none) {
+    if (o.color == VertexScalar::von_mises && o.color_values.size() != nf) {
+      throw ConfigError(path, "--color", "von Mises colours need the stress of every frame");
+    }
+    const auto peak =
+        o.color_values.empty() ? peak_displacement(a) : peak_over_frames(o.color_values);
     const float max = *std::max_element(peak.begin(), peak.end());
-    attributes["COLOR_0"] = vec3_accessor(b, viridis_colors(peak, max), nv, false);
-    const int view = b.view(peak.data(), peak.size() * 4, kArrayBuffer);
-    attributes["_DISPLACEMENT"] = b.accessor({{"bufferView", view},
-                                              {"byteOffset", 0},
-                                              {"componentType", kFloat},
-                                              {"count", nv},
-                                              {"type", "SCALAR"}});
+    attributes["COLOR_0"] = vec3_accessor(b, out(viridis_colors(peak, max), 3), nv, false);
+    const auto peak_out = out(peak, 1);
+    const int view = b.view(peak_out.data(), peak_out.size() * 4, kArrayBuffer);
+    attributes[gltf_attribute_name(o.color)] = b.accessor({{"bufferView", view},
+                                                           {"byteOffset", 0},
+                                                           {"componentType", kFloat},
+                                                           {"count", nv},
+                                                           {"type", "SCALAR"}});
     material["pbrMetallicRoughness"]["baseColorFactor"] = {1.0, 1.0, 1.0, 1.0};
-    material["extras"] = {{"color", "peak displacement, viridis"}, {"min_m", 0.0}, {"max_m", max}};
+    const bool stress = o.color == VertexScalar::von_mises;
+    material["extras"] = {
+        {"color", stress ? "peak von Mises stress, viridis" : "peak displacement, viridis"},
+        {"unit", unit_of(o.color)},
+        {stress ? "min_pa" : "min_m", 0.0},
+        {stress ? "max_pa" : "max_m", max}};
   }
   nlohmann::json targets = nlohmann::json::array(), names = nlohmann::json::array();
   for (std::size_t k = 0; k < nf; ++k) {
@@ -134,8 +165,8 @@ FrameTiming write_glb(const std::string& path, const SurfaceAnimation& a, const 
       delta[i] -= rest[i];
       normal[i] -= rest_normals[i];
     }
-    targets.push_back({{"POSITION", vec3_accessor(b, delta, nv)},
-                       {"NORMAL", vec3_accessor(b, normal, nv, false)}});
+    targets.push_back({{"POSITION", vec3_accessor(b, out(delta, 3), nv)},
+                       {"NORMAL", vec3_accessor(b, out(normal, 3), nv, false)}});
     names.push_back(fmt::format("frame_{:04}", k));
   }
   std::vector<float> weights(nf * nf, 0.0f);

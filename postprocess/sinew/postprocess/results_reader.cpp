@@ -13,6 +13,7 @@
 #include "sinew/formats/file_kind.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/results_format.hpp"
+#include "sinew/postprocess/results_file.hpp"
 
 namespace sinew::postprocess {
 
@@ -22,6 +23,15 @@ namespace {
 
 using formats::kResultsFormatName;
 using formats::kResultsFormatVersion;
+
+std::vector<std::string> surface_names(hid_t file, const std::string& path) {
+  if (!h5::exists(file, "surfaces")) return {};
+  auto names = h5::members(file, "/surfaces", path);
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace
 
 h5::Handle open_results(const std::string& path) {
   if (!std::filesystem::exists(path)) throw IoError(path, "", "no such file");
@@ -41,15 +51,6 @@ h5::Handle open_results(const std::string& path) {
   }
   return file;
 }
-
-std::vector<std::string> surface_names(hid_t file, const std::string& path) {
-  if (!h5::exists(file, "surfaces")) return {};
-  auto names = h5::members(file, "/surfaces", path);
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
-}  // namespace
 
 std::vector<std::string> list_surfaces(const std::string& path) {
   auto file = open_results(path);
@@ -112,6 +113,24 @@ SurfaceAnimation read_surface(const std::string& path, const std::string& name) 
                        all.begin() + static_cast<std::ptrdiff_t>((f + 1) * per_frame));
   }
   a.rest = a.frames.front();
+  const std::string uv_name = group + "/uvs", uvt_name = group + "/uv_triangles";
+  if (h5::exists(file, uv_name) || h5::exists(file, uvt_name)) {
+    for (const auto& ds : {uv_name, uvt_name}) {
+      if (!h5::exists(file, ds))
+        throw FormatError(path, ds, "missing dataset (uvs and uv_triangles go together)");
+    }
+    const auto uv_shape = h5::shape(file, uv_name, path);
+    if (uv_shape.size() != 2 || uv_shape[1] != 2) {
+      throw FormatError(path, uv_name, "expected shape Q × 2");
+    }
+    const auto uvt_shape = h5::shape(file, uvt_name, path);
+    if (uvt_shape.size() != 2 || uvt_shape[1] != 3 || uvt_shape[0] != tri_shape[0]) {
+      throw FormatError(path, uvt_name,
+                        fmt::format("expected shape {} × 3 (one row per triangle)", tri_shape[0]));
+    }
+    a.uvs = h5::read<float>(file, uv_name, path);
+    a.uv_triangles = h5::read<std::int32_t>(file, uvt_name, path);
+  }
   if (h5::exists(file, "/frames/step")) {
     const auto steps = h5::read<std::int64_t>(file, "/frames/step", path);
     if (!steps.empty() && steps.front() != 0) {
@@ -210,6 +229,7 @@ SurfaceAnimation read_volume_boundary(const std::string& path) {
     }
   }
   a.rest = a.frames.front();
+  a.volume_nodes = std::move(nodes);
   validate(a);
   return a;
 }
@@ -228,6 +248,28 @@ void validate(const SurfaceAnimation& a) {
       throw FormatError(a.file, group + "/triangles",
                         fmt::format("vertex id {} out of range [0, {})", a.triangles[i], v))
           .at(static_cast<std::int64_t>(i / 3));
+    }
+  }
+  if (!a.uv_triangles.empty() || !a.uvs.empty()) {
+    if (a.uv_triangles.size() != a.triangles.size() || a.uvs.size() % 2 != 0) {
+      throw FormatError(a.file, group + "/uv_triangles",
+                        fmt::format("{} texture corner ids for {} triangle corners",
+                                    a.uv_triangles.size(), a.triangles.size()));
+    }
+    const auto q = static_cast<std::int64_t>(a.uvs.size() / 2);
+    for (std::size_t i = 0; i < a.uv_triangles.size(); ++i) {
+      if (a.uv_triangles[i] < 0 || a.uv_triangles[i] >= q) {
+        throw FormatError(
+            a.file, group + "/uv_triangles",
+            fmt::format("texture coordinate id {} out of range [0, {})", a.uv_triangles[i], q))
+            .at(static_cast<std::int64_t>(i / 3));
+      }
+    }
+    for (std::size_t i = 0; i < a.uvs.size(); ++i) {
+      if (!std::isfinite(a.uvs[i])) {
+        throw FormatError(a.file, group + "/uvs", "non-finite texture coordinate")
+            .at(static_cast<std::int64_t>(i / 2));
+      }
     }
   }
   if (a.frames.size() != a.times.size() || a.frames.empty()) {

@@ -4,7 +4,8 @@
 //
 // Read: /frames/time (F64 F), /surfaces/<name>/triangles (I32 T × 3) and
 // /surfaces/<name>/positions (F64 F' × V × 3, m, F' ≥ F: a frame is complete once its time is
-// written, so rows past F are ignored). Positions are kept as float (m): the renderers and the
+// written, so rows past F are ignored), and when present /surfaces/<name>/uvs (F64 Q × 2) with
+// /surfaces/<name>/uv_triangles (I32 T × 3). Positions are kept as float (m): the renderers and the
 // glTF/PC2/OBJ files all use 32-bit floats.
 //
 // The rest pose is frame 0's positions: frame 0 is the engine's step 0 (t = 0), where every
@@ -25,10 +26,18 @@ struct SurfaceAnimation {
   std::vector<float> rest;              // V × 3, m (frame 0)
   std::vector<std::vector<float>> frames;  // F entries of V × 3, m
   std::vector<double> times;               // F frame times, s (scene time), strictly increasing
+  // Texture coordinates (optional, from /surfaces/<name>/uvs and uv_triangles): Q × 2 (u, v) in
+  // OBJ's convention ((0, 0) bottom-left, v up), and T × 3 ids into them, triangle t's corner k
+  // at uv_triangles[3t + k]; both empty when the surface has none.
+  std::vector<float> uvs;
+  std::vector<std::int32_t> uv_triangles;
+  // The volume's boundary only (read_volume_boundary): the mesh node of each vertex.
+  std::vector<std::int32_t> volume_nodes;
 
   std::size_t vertex_count() const { return rest.size() / 3; }
   std::size_t triangle_count() const { return triangles.size() / 3; }
   std::size_t frame_count() const { return frames.size(); }
+  bool has_uvs() const { return !uv_triangles.empty(); }
 };
 
 // Names of the visual surfaces stored in a results file (sorted). Throws FormatError when the

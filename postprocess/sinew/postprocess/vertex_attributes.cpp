@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "sinew/common/error.hpp"
 #include "sinew/postprocess/rasterizer.hpp"
@@ -20,7 +21,8 @@ float srgb_to_linear(std::uint8_t c) {
 VertexScalar parse_vertex_scalar(const std::string& text, const std::string& field) {
   if (text == "none") return VertexScalar::none;
   if (text == "displacement") return VertexScalar::displacement;
-  throw ConfigError("", field, "expected none or displacement, got \"" + text + "\"");
+  if (text == "von_mises") return VertexScalar::von_mises;
+  throw ConfigError("", field, "expected none, displacement or von_mises, got \"" + text + "\"");
 }
 
 std::vector<float> smooth_normals(const std::vector<float>& positions,
@@ -45,6 +47,21 @@ std::vector<float> peak_displacement(const SurfaceAnimation& a) {
   return peak;
 }
 
+std::vector<float> peak_over_frames(const std::vector<std::vector<float>>& frames) {
+  std::vector<float> peak(frames.empty() ? 0 : frames.front().size(), 0.0f);
+  for (const auto& f : frames)
+    for (std::size_t i = 0; i < peak.size(); ++i) peak[i] = std::max(peak[i], f[i]);
+  return peak;
+}
+
+const char* gltf_attribute_name(VertexScalar scalar) {
+  return scalar == VertexScalar::von_mises ? "_VON_MISES" : "_DISPLACEMENT";
+}
+
+const char* unit_of(VertexScalar scalar) {
+  return scalar == VertexScalar::von_mises ? "Pa" : "m";
+}
+
 std::vector<float> viridis_colors(const std::vector<float>& values, float max) {
   std::vector<float> out;
   out.reserve(values.size() * 3);
@@ -53,6 +70,40 @@ std::vector<float> viridis_colors(const std::vector<float>& values, float max) {
     out.push_back(srgb_to_linear(c.r));
     out.push_back(srgb_to_linear(c.g));
     out.push_back(srgb_to_linear(c.b));
+  }
+  return out;
+}
+
+SeamSplit split_at_seams(const SurfaceAnimation& a) {
+  SeamSplit out;
+  if (!a.has_uvs()) {
+    out.vertex.resize(a.vertex_count());
+    for (std::size_t i = 0; i < out.vertex.size(); ++i)
+      out.vertex[i] = static_cast<std::int32_t>(i);
+    out.triangles = a.triangles;
+    return out;
+  }
+  std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> id;
+  out.triangles.reserve(a.triangles.size());
+  for (std::size_t c = 0; c < a.triangles.size(); ++c) {
+    const std::pair<std::int32_t, std::int32_t> key{a.triangles[c], a.uv_triangles[c]};
+    const auto [at, added] = id.emplace(key, static_cast<std::int32_t>(out.vertex.size()));
+    if (added) {
+      out.vertex.push_back(key.first);
+      out.uv.push_back(key.second);
+    }
+    out.triangles.push_back(at->second);
+  }
+  return out;
+}
+
+std::vector<float> gather_rows(const std::vector<float>& values, std::size_t width,
+                               const std::vector<std::int32_t>& rows) {
+  std::vector<float> out;
+  out.reserve(rows.size() * width);
+  for (const auto r : rows) {
+    const auto* row = values.data() + static_cast<std::size_t>(r) * width;
+    out.insert(out.end(), row, row + width);
   }
   return out;
 }

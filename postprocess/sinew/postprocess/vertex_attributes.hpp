@@ -10,9 +10,10 @@
 
 namespace sinew::postprocess {
 
-// What the exports colour the vertices by: nothing, or |u| = |x − x_rest| (m).
-enum class VertexScalar { none, displacement };
-// Parses "none" or "displacement"; throws ConfigError naming `field`.
+// What the exports colour the vertices by: nothing, |u| = |x − x_rest| (m), or the von Mises
+// stress (Pa) of the elements around the vertex (element_fields.hpp).
+enum class VertexScalar { none, displacement, von_mises };
+// Parses "none", "displacement" or "von_mises"; throws ConfigError naming `field`.
 VertexScalar parse_vertex_scalar(const std::string& text, const std::string& field = "--color");
 
 // Smooth vertex normals of a pose (positions V × 3, m; triangles T × 3, counter-clockwise seen
@@ -24,6 +25,30 @@ std::vector<float> smooth_normals(const std::vector<float>& positions,
 
 // Per-vertex peak of |x_f − x_rest| over all frames, V values, m.
 std::vector<float> peak_displacement(const SurfaceAnimation& animation);
+
+// Per-vertex peak over frames of per-frame values (F entries of V values).
+std::vector<float> peak_over_frames(const std::vector<std::vector<float>>& frames);
+
+// The name of the glTF attribute that carries a scalar's raw values ("_DISPLACEMENT",
+// "_VON_MISES"; application-specific names start with "_") and its unit ("m", "Pa").
+const char* gltf_attribute_name(VertexScalar scalar);
+const char* unit_of(VertexScalar scalar);
+
+// glTF keeps one texture coordinate per vertex: a surface vertex whose triangle corners carry
+// several (u, v) (a texture seam) becomes one output vertex per distinct (vertex, uv id) pair, in
+// order of first use along the triangles. Per-vertex data (positions, normals computed on the
+// unsplit surface, so shading stays smooth across a seam, colours) is copied with gather_rows.
+// Without texture coordinates the split is the identity.
+struct SeamSplit {
+  std::vector<std::int32_t> vertex;     // per output vertex: the surface vertex it copies
+  std::vector<std::int32_t> uv;         // per output vertex: its uv id (empty without UVs)
+  std::vector<std::int32_t> triangles;  // T × 3 output vertex ids
+};
+SeamSplit split_at_seams(const SurfaceAnimation& animation);
+
+// The rows `rows` of `values` (a row-major array of rows of `width` floats), in that order.
+std::vector<float> gather_rows(const std::vector<float>& values, std::size_t width,
+                               const std::vector<std::int32_t>& rows);
 
 // Linear RGB colours (V × 3 floats in [0, 1]) of `values` through viridis over [0, max]; max ≤ 0
 // maps everything to viridis(0). Colours are linear, as glTF's COLOR_0 is: the sRGB of the colour

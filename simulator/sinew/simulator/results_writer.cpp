@@ -149,6 +149,20 @@ ResultsWriter::ResultsWriter(const std::string& directory, const formats::Model&
         for (std::size_t k = 0; k < 3; ++k) tri[3 * t + k] = surf.triangles[t][k];
       }
       h5::write(f, g + "/triangles", {surf.triangles.size(), 3}, tri.data(), p);
+      // Each vertex's element and natural coordinates, so that readers can interpolate element
+      // fields (stress, J) to the surface (postprocess/element_fields.hpp).
+      h5::write(f, g + "/embedding_element", {surf.embedding_element.size()},
+                surf.embedding_element.data(), p);
+      h5::write(f, g + "/embedding_local", {surf.embedding_local.size(), 3},
+                reinterpret_cast<const double*>(surf.embedding_local.data()), p);
+      if (!surf.uv_triangles.empty()) {
+        // The artist's texture coordinates, for the exporters (model format: per triangle corner).
+        static_assert(sizeof(formats::TexCoord) == 2 * sizeof(double));
+        static_assert(sizeof(surf.uv_triangles[0]) == 3 * sizeof(std::int32_t));
+        h5::write(f, g + "/uvs", {surf.uvs.size(), 2}, surf.uvs.front().data(), p);
+        h5::write(f, g + "/uv_triangles", {surf.uv_triangles.size(), 3},
+                  surf.uv_triangles.front().data(), p);
+      }
       impl_->surfaces.push_back(
           h5::create_series<double>(f, g + "/positions", {surf.vertices.size(), 3}, p));
       impl_->surface_displacements.push_back(
@@ -179,6 +193,27 @@ std::unique_ptr<ResultsWriter> ResultsWriter::resume(const std::string& director
       new ResultsWriter(Resume{}, directory, model, std::move(options)));
   const auto& p = w->h5_path_;
   auto& impl = *w->impl_;
+  {
+    // Read-only first: a damaged file must be refused before it is opened for writing. HDF5 1.10
+    // can crash closing a writable file whose damaged metadata it acted on (freeing chunks at
+    // damaged addresses: a fuzz case), never a read-only one.
+    auto check = h5::open_file(p, false);
+    std::vector<h5::ChunkExtent> chunks;
+    const auto add = [&](const std::string& name) {
+      if (!h5::exists(check, name)) return;
+      auto extents = h5::chunk_extents(h5::open_dataset(check, name, p), p, name);
+      chunks.insert(chunks.end(), extents.begin(), extents.end());
+    };
+    for (const auto* name : {"/frames/time", "/frames/step", "/frames/displacement",
+                             "/frames/von_mises", "/frames/J", "/frames/energy_density"}) {
+      add(name);
+    }
+    for (auto s : w->visual_) {
+      add(surface_group(model.surfaces[s]) + "/positions");
+      add(surface_group(model.surfaces[s]) + "/displacement");
+    }
+    h5::check_disjoint(std::move(chunks), p);
+  }
   impl.file = h5::open_file(p, true);
   if (h5::string_attribute(impl.file, "format", p) != kResultsFormatName) {
     throw FormatError(p, "format", "not a sinew results file");

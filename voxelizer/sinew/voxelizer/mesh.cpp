@@ -6,10 +6,12 @@
 #include <assimp/Importer.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <unordered_map>
 
@@ -160,16 +162,29 @@ void measure(const TriangleMesh& m, MeshDiagnostics& d) {
   d.enclosed_volume = volume;
 }
 
-void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent,
-             TriangleMesh& out) {
+// Appends the triangles of `node` and its children to `out`. missing_uvs counts triangles from
+// assimp meshes without texture coordinates (their corner_uvs are left NaN).
+void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent, TriangleMesh& out,
+             std::int64_t& missing_uvs) {
   const aiMatrix4x4 world = parent * node->mTransformation;
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   for (unsigned k = 0; k < node->mNumMeshes; ++k) {
     const aiMesh* mesh = scene->mMeshes[node->mMeshes[k]];
     if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-    const auto base = static_cast<std::int64_t>(out.vertices.size());
+    // assimp joins vertices equal in position and texture coordinates; a seam keeps one vertex per
+    // (u, v). Join equal positions here (the texture coordinates go with the triangle corners).
+    // Keyed by the bits, so a NaN coordinate (reported by load_mesh) is never joined to another.
+    std::map<std::array<std::uint32_t, 3>, std::int32_t> first;
+    std::vector<std::int32_t> index(mesh->mNumVertices);
     for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
       // Double precision for the node chain: assimp's matrices are float.
       const aiVector3D& p = mesh->mVertices[i];
+      const std::array<std::uint32_t, 3> bits{std::bit_cast<std::uint32_t>(p.x),
+                                              std::bit_cast<std::uint32_t>(p.y),
+                                              std::bit_cast<std::uint32_t>(p.z)};
+      const auto [at, added] = first.emplace(bits, static_cast<std::int32_t>(out.vertices.size()));
+      index[i] = at->second;
+      if (!added) continue;
       const aiMatrix4x4& w = world;
       const double x = p.x, y = p.y, z = p.z;
       out.vertices.push_back(
@@ -177,15 +192,23 @@ void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent
            double(w.b1) * x + double(w.b2) * y + double(w.b3) * z + double(w.b4),
            double(w.c1) * x + double(w.c2) * y + double(w.c3) * z + double(w.c4)});
     }
+    const aiVector3D* uv = mesh->HasTextureCoords(0) ? mesh->mTextureCoords[0] : nullptr;
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
       const aiFace& face = mesh->mFaces[f];
       if (face.mNumIndices != 3) continue;
-      out.triangles.push_back({static_cast<std::int32_t>(base + face.mIndices[0]),
-                               static_cast<std::int32_t>(base + face.mIndices[1]),
-                               static_cast<std::int32_t>(base + face.mIndices[2])});
+      out.triangles.push_back(
+          {index[face.mIndices[0]], index[face.mIndices[1]], index[face.mIndices[2]]});
+      CornerUvs c;
+      for (int j = 0; j < 3; ++j) {
+        c[j] = uv ? std::array<double, 2>{uv[face.mIndices[j]].x, uv[face.mIndices[j]].y}
+                  : std::array<double, 2>{nan, nan};
+      }
+      if (!uv) ++missing_uvs;
+      out.corner_uvs.push_back(c);
     }
   }
-  for (unsigned c = 0; c < node->mNumChildren; ++c) collect(scene, node->mChildren[c], world, out);
+  for (unsigned c = 0; c < node->mNumChildren; ++c)
+    collect(scene, node->mChildren[c], world, out, missing_uvs);
 }
 
 }  // namespace
@@ -242,8 +265,27 @@ void apply_transform(const MeshTransform& t, TriangleMesh& mesh) {
   const Mat3d r = rotation_matrix(t.rotate_deg);
   for (Vec3d& v : mesh.vertices) v = r * (s * v) + t.translate;
   // A mirroring transform (negative scale) would turn the mesh inside out; keep it outward.
-  if (s < 0)
-    for (auto& tri : mesh.triangles) std::swap(tri[1], tri[2]);
+  if (s < 0) flip_orientation(mesh);
+}
+
+void flip_orientation(TriangleMesh& mesh) {
+  for (auto& tri : mesh.triangles) std::swap(tri[1], tri[2]);
+  for (auto& c : mesh.corner_uvs) std::swap(c[1], c[2]);
+}
+
+IndexedUvs indexed_uvs(const TriangleMesh& mesh) {
+  IndexedUvs out;
+  std::map<std::array<double, 2>, std::int32_t> id;
+  for (const CornerUvs& c : mesh.corner_uvs) {
+    std::array<std::int32_t, 3> t{};
+    for (int k = 0; k < 3; ++k) {
+      const auto [at, added] = id.emplace(c[k], static_cast<std::int32_t>(out.uvs.size()));
+      if (added) out.uvs.push_back(c[k]);
+      t[k] = at->second;
+    }
+    out.triangles.push_back(t);
+  }
+  return out;
 }
 
 TriangleMesh load_mesh(const std::filesystem::path& path, const MeshTransform& t) {
@@ -259,13 +301,13 @@ TriangleMesh load_mesh(const std::filesystem::path& path, const MeshTransform& t
   if (!std::isfinite(t.scale) || t.scale == 0)
     throw GeometryError(file, "scale", "scale must be finite and non-zero");
   Assimp::Importer importer;
-  // Positions only: then JoinIdenticalVertices joins exactly equal positions even where the file
-  // stores per-corner normals or texture coordinates.
-  importer.SetPropertyInteger(
-      AI_CONFIG_PP_RVC_FLAGS,
-      aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_COLORS |
-          aiComponent_TEXCOORDS | aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
-          aiComponent_TEXTURES | aiComponent_LIGHTS | aiComponent_CAMERAS | aiComponent_MATERIALS);
+  // Positions and texture coordinates only: JoinIdenticalVertices then joins corners that differ
+  // in normals only; collect() joins equal positions whatever their texture coordinates.
+  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS,
+                              aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
+                                  aiComponent_COLORS | aiComponent_BONEWEIGHTS |
+                                  aiComponent_ANIMATIONS | aiComponent_TEXTURES |
+                                  aiComponent_LIGHTS | aiComponent_CAMERAS | aiComponent_MATERIALS);
   const aiScene* scene =
       importer.ReadFile(file, aiProcess_RemoveComponent | aiProcess_Triangulate |
                                   aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
@@ -274,8 +316,23 @@ TriangleMesh load_mesh(const std::filesystem::path& path, const MeshTransform& t
   }
   TriangleMesh mesh;
   mesh.source = file;
-  if (scene->mRootNode != nullptr) collect(scene, scene->mRootNode, aiMatrix4x4(), mesh);
+  std::int64_t missing_uvs = 0;
+  if (scene->mRootNode != nullptr)
+    collect(scene, scene->mRootNode, aiMatrix4x4(), mesh, missing_uvs);
   if (mesh.triangles.empty()) throw GeometryError(file, "", "the file contains no triangles");
+  // Texture coordinates are kept only when every triangle has finite ones: a mesh needs none to
+  // be voxelized, so damaged ones are dropped with a warning rather than refused.
+  std::int64_t bad_uvs = 0;
+  for (const auto& c : mesh.corner_uvs)
+    for (const auto& uv : c)
+      if (!std::isfinite(uv[0]) || !std::isfinite(uv[1])) ++bad_uvs;
+  if (missing_uvs > 0 && missing_uvs < static_cast<std::int64_t>(mesh.triangles.size())) {
+    log::warn("{}: {} of {} triangles have no texture coordinates; none are kept", file,
+              missing_uvs, mesh.triangles.size());
+  } else if (missing_uvs == 0 && bad_uvs > 0) {
+    log::warn("{}: {} texture coordinates are not finite; none are kept", file, bad_uvs);
+  }
+  if (missing_uvs > 0 || bad_uvs > 0) mesh.corner_uvs.clear();
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
     const Vec3d& v = mesh.vertices[i];
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
@@ -379,7 +436,10 @@ MeshDiagnostics clean_mesh(TriangleMesh& mesh, double weld_tolerance) {
   seen.reserve(mesh.triangles.size());
   std::vector<std::array<std::int32_t, 3>> kept;
   kept.reserve(mesh.triangles.size());
-  for (const auto& t0 : mesh.triangles) {
+  const bool has_uvs = mesh.corner_uvs.size() == mesh.triangles.size();
+  std::vector<CornerUvs> kept_uvs;
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    const auto& t0 = mesh.triangles[i];
     std::array<std::int32_t, 3> t{static_cast<std::int32_t>(remap[t0[0]]),
                                   static_cast<std::int32_t>(remap[t0[1]]),
                                   static_cast<std::int32_t>(remap[t0[2]])};
@@ -395,6 +455,7 @@ MeshDiagnostics clean_mesh(TriangleMesh& mesh, double weld_tolerance) {
       continue;
     }
     kept.push_back(t);
+    if (has_uvs) kept_uvs.push_back(mesh.corner_uvs[i]);
   }
   // Compact the vertices: keep referenced ones in their original order.
   std::vector<std::int32_t> new_index(static_cast<std::size_t>(n), -1);
@@ -413,6 +474,7 @@ MeshDiagnostics clean_mesh(TriangleMesh& mesh, double weld_tolerance) {
     for (int k = 0; k < 3; ++k) t[k] = new_index[t[k]];
   mesh.vertices = std::move(vertices);
   mesh.triangles = std::move(kept);
+  mesh.corner_uvs = std::move(kept_uvs);
   measure(mesh, d);
   return d;
 }

@@ -14,14 +14,34 @@
 
 namespace sinew::voxelizer {
 
+// Texture coordinates (u, v) of a triangle's three corners, in assimp's (and OBJ's) convention:
+// (0, 0) at the image's bottom-left corner, v up.
+using CornerUvs = std::array<std::array<double, 2>, 3>;
+
 // An indexed triangle mesh. vertices: [n_vertices] positions (m). triangles: [n_triangles] vertex
 // indices, counter-clockwise seen from outside when the mesh is consistently oriented (the
-// winding number is +1 inside such a mesh). source: where it came from (a path), for messages.
+// winding number is +1 inside such a mesh). corner_uvs: empty (no texture coordinates) or one
+// entry per triangle, its corners' texture coordinates in the triangle's corner order: they
+// follow the triangles through cleaning and flipping, so welding positions never merges two
+// different (u, v) of a texture seam. source: where it came from (a path), for messages.
 struct TriangleMesh {
   std::vector<sinew::Vec3d> vertices;
   std::vector<std::array<std::int32_t, 3>> triangles;
+  std::vector<CornerUvs> corner_uvs;
   std::string source;
 };
+
+// Reverses every triangle's orientation (swaps corners 1 and 2, with their texture coordinates).
+void flip_orientation(TriangleMesh& mesh);
+
+// The corner texture coordinates of a mesh as an indexed table, as OBJ's `vt` and `f v/vt` store
+// them: `uvs` holds each distinct (u, v) once (first-use order), `triangles[t][k]` is the id of
+// triangle t's corner k. Both empty when the mesh has no texture coordinates.
+struct IndexedUvs {
+  std::vector<std::array<double, 2>> uvs;
+  std::vector<std::array<std::int32_t, 3>> triangles;
+};
+IndexedUvs indexed_uvs(const TriangleMesh& mesh);
 
 // Length unit of the coordinates stored in a mesh file.
 enum class LengthUnit { m, cm, mm };
@@ -55,7 +75,8 @@ void apply_transform(const MeshTransform& t, TriangleMesh& mesh);
 // scene are merged, each with its node transforms (the whole node chain) applied; polygons are
 // triangulated; point and line primitives are ignored. Vertices with identical positions inside
 // one assimp mesh are joined (formats like STL store each triangle's corners separately); further
-// welding is clean_mesh's job. Then t is applied: the result is in metres. Unit metadata inside
+// welding is clean_mesh's job. Texture coordinates (assimp's channel 0) become corner_uvs when
+// every part of the file has them (otherwise none are kept, logged). Then t is applied: the result is in metres. Unit metadata inside
 // a file (COLLADA <unit>, FBX UnitScaleFactor) is applied by assimp as part of the node
 // transforms; t.unit says what the resulting numbers are in.
 // Throws IoError (missing/unreadable file), FormatError (assimp cannot parse it: unknown format or

@@ -204,7 +204,7 @@ class Pipeline {
     if (lm.diagnostics.closed && lm.diagnostics.inconsistently_oriented_edges == 0 &&
         lm.diagnostics.enclosed_volume < 0) {
       // A closed mesh oriented inward: the winding number would be -1 inside it.
-      for (auto& t : lm.mesh.triangles) std::swap(t[1], t[2]);
+      flip_orientation(lm.mesh);
       lm.diagnostics.enclosed_volume = -lm.diagnostics.enclosed_volume;
       warn(role + " (" + src.describe() + "): oriented inward; triangles flipped");
     }
@@ -722,6 +722,9 @@ class Pipeline {
       surf.role = formats::SurfaceRole::visual;
       for (const auto& p : mesh.vertices) surf.vertices.push_back(to_point(p));
       for (const auto& t : mesh.triangles) surf.triangles.push_back({t[0], t[1], t[2]});
+      auto uvs = indexed_uvs(mesh);
+      surf.uvs = std::move(uvs.uvs);
+      surf.uv_triangles = std::move(uvs.triangles);
       auto emb = embed_points(m, surf.vertices);
       surf.embedding_element = std::move(emb.element);
       surf.embedding_local = std::move(emb.local);

@@ -163,7 +163,9 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     slide_distance_.upload(a.slide_distance);
   }
   const PreparedModel& prep = core_.prepared();
-  work_ = fx.gravity || !prep.forces.empty() || !program.prescribed_set.empty();
+  // Work: loads, prescribed sets and projections (sliding, planes), as run_program counts it.
+  work_ = fx.gravity || !prep.forces.empty() || !program.prescribed_set.empty() ||
+          !prep.slide_node.empty() || !prep.plane_nodes.empty();
   program_in_node_ = prep.slide_node.empty() && (con_node_.size() || work_);
   work_base_.allocate(1);
   work_base_.zero();

@@ -48,8 +48,14 @@ struct ConstraintData {
 };
 
 // Runs ops [begin, end) of node i on v (its u(n+1) after the update) and, with `work`, adds the
-// work of its nodal forces and prescribed constraint forces, Σ R · (u(n+1) − u(n−1))/2 with the
-// constraint force (u − u*)/A, to w. factor: [force factors at t_n | prescribed factors at t_n+1].
+// work of its nodal forces and constraint forces, Σ R · (u(n+1) − u(n−1))/2, to w. A constraint
+// moves the node from where the forces put it; its force is that move over A = Δt²/m (central
+// differences): R = (u − u*)/A for a prescribed set (u* captured before the node's constraints, so
+// this also counts the projections of a node that is prescribed too), and for a node with no
+// prescribed set R = Σ (v after − v before)/A over its sliding and plane projections (zero work on
+// a fixed surface in exact arithmetic; nonzero when the projection stops a node thrown at the
+// surface, or works on round-off noise in float: docs/physics.md, "Instability"). Rigid nodes do
+// not move: no work. factor: [force factors at t_n | prescribed factors at t_n+1].
 // With `loads` off (the initial constraints at t = 0) nodal forces and captures are skipped.
 // kSlide: 0 the model has no sliding (the op is compiled out); 1 sliding with the list refresh
 // (and grid search) inline; 2 sliding with lists refreshed ahead by slide_refresh_kernel.
@@ -59,8 +65,10 @@ SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, 
                                     std::int32_t end, const T* factor, bool loads, Vec3<T> v,
                                     const Vec3<T>* up, bool work, double& w,
                                     const SlideStart<T>& start = {}, std::int32_t started = -1) {
+  Vec3<T> projected{T(0), T(0), T(0)};  // the moves of the sliding and plane projections
   for (std::int32_t q = begin; q < end; ++q) {
     const std::int32_t code = d.op[q], arg = code & kOpArg;
+    const Vec3<T> before = v;
     switch (code >> kOpShift) {
       case kOpForce:
         // A force at factor 0 is skipped rather than added as ±0: a set that is off leaves the
@@ -77,10 +85,12 @@ SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, 
           SlideStart<T> st = start;
           if (arg != started) st = slide_start(d.slide, arg, false);
           v = slide_entry<T, kSlide == 1>(d.slide, arg, st, d.rest[i], v);
+          projected = projected + (v - before);
         }
         break;
       case kOpPlane:
         v = physics::project_to_plane(v, d.plane_normal[arg]);
+        projected = projected + (v - before);
         break;
       case kOpPrescribe: {
         const std::int32_t set = d.prescribed_set[arg], mask = d.prescribed_mask[set];
@@ -94,6 +104,8 @@ SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, 
   }
   if (work && begin < end) {
     const Vec3<T> vp = up[i];
+    const double a = double(d.cd.a_over_inverse_mass) * double(d.inverse_mass[i]);
+    bool prescribed = false;
     for (std::int32_t q = begin; q < end; ++q) {
       const std::int32_t code = d.op[q], arg = code & kOpArg, kind = code >> kOpShift;
       if (kind == kOpForce) {
@@ -102,12 +114,16 @@ SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, 
         for (int k = 0; k < 3; ++k)
           w += f * double(d.force_per_node[arg][k]) * 0.5 * (double(v[k]) - double(vp[k]));
       } else if (kind == kOpPrescribe) {
-        const double a = double(d.cd.a_over_inverse_mass) * double(d.inverse_mass[i]);
+        prescribed = true;
         for (int k = 0; k < 3; ++k) {
           const double fc = (double(v[k]) - double(d.prescribed_free[arg][k])) / a;
           w += fc * 0.5 * (double(v[k]) - double(vp[k]));
         }
       }
+    }
+    if (!prescribed) {
+      for (int k = 0; k < 3; ++k)
+        w += double(projected[k]) / a * 0.5 * (double(v[k]) - double(vp[k]));
     }
   }
   return v;
