@@ -114,6 +114,7 @@ std::optional<std::map<std::uint16_t, std::uint64_t>> collection_objects(RawFile
 }  // namespace
 
 void check_vlen_dataset(hid_t dataset, const std::string& file, const std::string& name) {
+  const LibraryLock lock;
   Handle dcpl(H5Dget_create_plist(dataset), H5Pclose);
   if (!dcpl.valid() || H5Pget_layout(dcpl) != H5D_CONTIGUOUS) {
     throw FormatError(file, name,
@@ -222,6 +223,7 @@ std::optional<std::vector<unsigned char>> v1_attribute_value(RawFile& raw, std::
 
 void check_global_heaps(hid_t obj, const std::string& file, const std::string& where,
                         const std::string& attribute) {
+  const LibraryLock lock;
   RawFile raw(obj, file, where);
   // In an unchecksummed header, the attribute's own heap reference: length, collection, index.
   if (const auto header = header_address(obj)) {
