@@ -3,7 +3,10 @@
 // formats' one lock (hdf5_file.hpp, library_mutex()). These tests pass on a thread-safe HDF5 build
 // (Debian's) with or without that lock, since HDF5 then serialises itself; on a serial, not
 // thread-safe build (Ubuntu's libhdf5-dev 1.10, the GPU machine's) they are the ones that crash or
-// mix up contents and error messages without it.
+// mix up contents and error messages without it. Checked by linking these tests against Debian's
+// libhdf5_openmpi.so.103 (1.10.8, "Threadsafety: no", H5is_library_threadsafe 0): with the lock
+// taken out, ModelFilesWrittenAndReadInEightThreads segfaulted in 3 runs of 3; with it, 5 of 5
+// passed.
 #include <atomic>
 #include <cstdint>
 #include <fstream>
