@@ -80,9 +80,15 @@ std::atomic<bool> file_close_failed{false};
 
 struct LibraryLifetime {
   LibraryLifetime() {
+    // Not LibraryLock: its quiet_errors() would start the library, and H5dont_atexit must come
+    // before anything else.
+    const std::lock_guard<std::recursive_mutex> lock(library_mutex());
     if (H5dont_atexit() >= 0) {
       std::atexit([] {
-        if (!file_close_failed.load()) H5close();
+        // A thread still inside HDF5 at exit (a detached one): skip the clean-up rather than
+        // race it or wait for it.
+        std::unique_lock<std::recursive_mutex> lock(library_mutex(), std::try_to_lock);
+        if (lock.owns_lock() && !file_close_failed.load()) H5close();
       });
     }
   }
@@ -277,23 +283,45 @@ Handle& Handle::operator=(Handle&& o) noexcept {
 }
 
 void Handle::reset() {
+  if (id_ < 0) return;  // empty or moved from: nothing to close, no lock to take
+  const LibraryLock lock;
   // A failed close here is already being handled (an exception unwinding): drop its error stack.
   if (!close()) H5Eclear2(H5E_DEFAULT);
 }
 
 bool Handle::close() {
-  const herr_t status = id_ >= 0 && closer_ ? closer_(id_) : 0;
+  if (id_ < 0 || !closer_) {
+    id_ = -1;
+    return true;
+  }
+  const LibraryLock lock;
+  const herr_t status = closer_(id_);
   if (status < 0 && closer_ == &H5Fclose) file_close_failed.store(true);
   id_ = -1;
   return status >= 0;
 }
 
+std::recursive_mutex& library_mutex() {
+  static auto* const mutex = new std::recursive_mutex;  // never destroyed: see the header
+  return *mutex;
+}
+
+LibraryLock::LibraryLock() : guard_(library_mutex()) {
+  quiet_errors();
+}
+
 void quiet_errors() {
-  static std::once_flag once;
-  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+  // Per thread: a thread-safe HDF5 keeps the automatic error printing per thread, so a frame
+  // writer or a sweep run's thread would otherwise print HDF5's error stack on every failure.
+  thread_local bool quiet = false;
+  if (quiet) return;
+  const std::lock_guard<std::recursive_mutex> guard(library_mutex());
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  quiet = true;
 }
 
 std::string error_detail() {
+  const LibraryLock lock;
   std::string detail;
   H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, innermost, &detail);
   H5Eclear2(H5E_DEFAULT);
@@ -303,14 +331,14 @@ std::string error_detail() {
 // ---- Files ------------------------------------------------------------------------------------
 
 bool is_hdf5(const std::string& path) {
-  quiet_errors();
+  const LibraryLock lock;
   const htri_t r = H5Fis_hdf5(path.c_str());
   H5Eclear2(H5E_DEFAULT);
   return r > 0;
 }
 
 Handle create_file(const std::string& path, const std::string& display) {
-  quiet_errors();
+  const LibraryLock lock;
   Handle fcpl = untimed(H5P_FILE_CREATE);  // the root group: no time stamps
   // The 1.8 format as the lowest: superblock v2 and object headers v2, which carry checksums, with
   // links and attributes in the headers or in checksummed fractal heaps and v2 B-trees; so a
@@ -341,7 +369,7 @@ Handle read_access() {
 }  // namespace
 
 Handle open_file(const std::string& path, bool writable) {
-  quiet_errors();
+  const LibraryLock lock;
   const Handle fapl = read_access();
   Handle f(H5Fopen(path.c_str(), writable ? H5F_ACC_RDWR : H5F_ACC_RDONLY, fapl), H5Fclose);
   if (!f.valid()) throw io_fail(path, "", "cannot open as an HDF5 file");
@@ -350,7 +378,7 @@ Handle open_file(const std::string& path, bool writable) {
 }
 
 Handle open_checked(const std::string& path) {
-  quiet_errors();
+  const LibraryLock lock;
   {
     // HDF5 says "unable to open file" for a missing file and for a damaged one alike; ask the
     // system first so a missing or unreadable file is an IoError with the real reason.
@@ -368,16 +396,19 @@ Handle open_checked(const std::string& path) {
 }
 
 void close_file(Handle& file, const std::string& display) {
+  const LibraryLock lock;
   if (!file.close()) throw io_fail(display, "", "cannot close (flush) the file");
 }
 
 void flush(hid_t file, const std::string& path) {
+  const LibraryLock lock;
   if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) throw io_fail(path, "", "cannot flush to disk");
 }
 
 // ---- Groups -----------------------------------------------------------------------------------
 
 Handle create_group(hid_t loc, const std::string& name, const std::string& file, bool ordered) {
+  const LibraryLock lock;
   Handle gcpl = untimed(H5P_GROUP_CREATE);
   if (ordered) H5Pset_link_creation_order(gcpl, H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED);
   Handle g(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, gcpl, H5P_DEFAULT), H5Gclose);
@@ -386,6 +417,7 @@ Handle create_group(hid_t loc, const std::string& name, const std::string& file,
 }
 
 Handle open_group(hid_t loc, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   if (!exists(loc, name)) throw FormatError(file, name, "missing group");
   Handle g(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), H5Gclose);
   if (!g.valid()) throw format_fail(file, name, "cannot open, not a group");
@@ -393,6 +425,7 @@ Handle open_group(hid_t loc, const std::string& name, const std::string& file) {
 }
 
 bool exists(hid_t loc, const std::string& name) {
+  const LibraryLock lock;
   // H5Lexists needs every intermediate group to exist, so walk the path prefix by prefix.
   std::size_t pos = 0;
   while (true) {
@@ -407,6 +440,7 @@ bool exists(hid_t loc, const std::string& name) {
 }
 
 std::vector<std::string> members(hid_t loc, const std::string& group, const std::string& file) {
+  const LibraryLock lock;
   Handle g = open_group(loc, group, file);
   Handle gcpl(H5Gget_create_plist(g), H5Pclose);
   unsigned flags = 0;
@@ -442,6 +476,7 @@ void write_dataset(hid_t loc, const std::string& name, const Handle& space, hid_
 template <typename T>
 void write(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims, const T* data,
            const std::string& file) {
+  const LibraryLock lock;
   hsize_t count = 1;
   for (auto d : dims) count *= d;
   write_dataset(loc, name, simple_space(dims), Type<T>::stored(), Type<T>::native(), data,
@@ -450,6 +485,7 @@ void write(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
 
 void write_strings(hid_t loc, const std::string& name, const std::vector<std::string>& values,
                    const std::string& file) {
+  const LibraryLock lock;
   std::vector<const char*> ptrs;
   ptrs.reserve(values.size());
   for (const auto& s : values) ptrs.push_back(s.c_str());
@@ -460,12 +496,14 @@ void write_strings(hid_t loc, const std::string& name, const std::vector<std::st
 
 void write_string(hid_t loc, const std::string& name, const std::string& value,
                   const std::string& file) {
+  const LibraryLock lock;
   const char* ptr = value.c_str();
   Handle type = utf8_string_type();
   write_dataset(loc, name, scalar_space(), type, type, &ptr, false, file);
 }
 
 Handle open_dataset(hid_t loc, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   if (!exists(loc, name)) throw FormatError(file, name, "missing dataset");
   Handle ds(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
   if (!ds.valid()) throw format_fail(file, name, "cannot open, not a dataset");
@@ -492,12 +530,14 @@ Handle open_dataset(hid_t loc, const std::string& name, const std::string& file)
 }
 
 std::vector<hsize_t> shape(hid_t loc, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   return dims_of(open_dataset(loc, name, file), file, name);
 }
 
 template <typename T>
 std::vector<T> read(hid_t loc, const std::string& name, const std::string& file,
                     std::int64_t expected) {
+  const LibraryLock lock;
   Handle ds = open_dataset(loc, name, file);
   hsize_t n = 1;
   for (auto d : dims_of(ds, file, name)) n *= d;
@@ -514,6 +554,7 @@ std::vector<T> read(hid_t loc, const std::string& name, const std::string& file,
 template <typename T>
 std::vector<T> read_array(hid_t loc, const std::string& name, const std::string& file,
                           hsize_t cols) {
+  const LibraryLock lock;
   constexpr H5T_class_t cls = std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER;
   Handle ds = open_typed<T>(loc, name, file, cls, Type<T>::name());
   const auto dims = expect_shape(ds, cols == 0 ? 1 : 2, cols, file, name);
@@ -527,6 +568,7 @@ std::vector<T> read_array(hid_t loc, const std::string& name, const std::string&
 
 template <typename T>
 T read_scalar(hid_t loc, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   constexpr H5T_class_t cls = std::is_floating_point_v<T> ? H5T_FLOAT : H5T_INTEGER;
   Handle ds = open_typed<T>(loc, name, file, cls, Type<T>::name());
   expect_shape(ds, 0, 0, file, name);
@@ -538,12 +580,14 @@ T read_scalar(hid_t loc, const std::string& name, const std::string& file) {
 }
 
 std::vector<std::string> read_strings(hid_t loc, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   Handle ds = open_typed<char>(loc, name, file, H5T_STRING, "string");
   const auto dims = expect_shape(ds, 1, 0, file, name);
   return read_string_values(ds, static_cast<std::size_t>(dims[0]), file, name);
 }
 
 std::string read_string(hid_t loc, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   Handle ds = open_typed<char>(loc, name, file, H5T_STRING, "string");
   expect_shape(ds, 0, 0, file, name);
   return read_string_values(ds, 1, file, name).front();
@@ -554,6 +598,7 @@ std::string read_string(hid_t loc, const std::string& name, const std::string& f
 template <typename T>
 Handle create_series(hid_t loc, const std::string& name, const std::vector<hsize_t>& tail,
                      const std::string& file) {
+  const LibraryLock lock;
   std::vector<hsize_t> dims{0}, maxdims{H5S_UNLIMITED}, chunk{1};
   for (auto t : tail) {
     dims.push_back(t);
@@ -573,6 +618,7 @@ Handle create_series(hid_t loc, const std::string& name, const std::vector<hsize
 template <typename T>
 void append(hid_t dataset, hsize_t frame, const T* data, const std::string& file,
             const std::string& name) {
+  const LibraryLock lock;
   auto dims = dims_of(dataset, file, name);
   dims[0] = frame + 1;
   if (H5Dset_extent(dataset, dims.data()) < 0) throw io_fail(file, name, "cannot extend");
@@ -636,6 +682,7 @@ void check_disjoint(std::vector<ChunkExtent> extents, const std::string& file) {
 }
 
 void set_frames(hid_t dataset, hsize_t frames, const std::string& file, const std::string& name) {
+  const LibraryLock lock;
   auto dims = dims_of(dataset, file, name);
   if (dims.empty()) throw FormatError(file, name, "a scalar has no frames");
   // Shrinking frees the chunks past `frames` at the addresses the chunk index gives.
@@ -648,6 +695,7 @@ void set_frames(hid_t dataset, hsize_t frames, const std::string& file, const st
 
 void create_frame_view(hid_t loc, const std::string& name, const std::string& source, hsize_t frame,
                        const std::string& file) {
+  const LibraryLock lock;
   Handle src(H5Dopen2(loc, source.c_str(), H5P_DEFAULT), H5Dclose);
   if (!src.valid()) throw io_fail(file, source, "cannot open the dataset to view");
   auto dims = dims_of(src, file, source);
@@ -680,6 +728,7 @@ void create_frame_view(hid_t loc, const std::string& name, const std::string& so
 
 void set_attribute(hid_t obj, const std::string& name, const std::string& value,
                    const std::string& file, StringKind kind) {
+  const LibraryLock lock;
   if (kind == StringKind::variable) {
     Handle type = utf8_string_type();
     const char* ptr = value.c_str();
@@ -695,26 +744,31 @@ void set_attribute(hid_t obj, const std::string& name, const std::string& value,
 }
 
 void set_attribute(hid_t obj, const std::string& name, double value, const std::string& file) {
+  const LibraryLock lock;
   put_attribute(obj, name, Type<double>::stored(), Type<double>::native(), &value, file);
 }
 void set_attribute(hid_t obj, const std::string& name, std::int64_t value,
                    const std::string& file) {
+  const LibraryLock lock;
   put_attribute(obj, name, Type<std::int64_t>::stored(), Type<std::int64_t>::native(), &value,
                 file);
 }
 void set_attribute(hid_t obj, const std::string& name, std::int32_t value,
                    const std::string& file) {
+  const LibraryLock lock;
   put_attribute(obj, name, Type<std::int32_t>::stored(), Type<std::int32_t>::native(), &value,
                 file);
 }
 
 bool has_attribute(hid_t obj, const std::string& name) {
+  const LibraryLock lock;
   const bool yes = H5Aexists(obj, name.c_str()) > 0;
   H5Eclear2(H5E_DEFAULT);
   return yes;
 }
 
 std::string string_attribute(hid_t obj, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   Handle a = open_attribute(obj, name, file, H5T_STRING, "string");
   Handle t(H5Aget_type(a), H5Tclose);
   if (H5Tis_variable_str(t) > 0) {
@@ -739,9 +793,11 @@ std::string string_attribute(hid_t obj, const std::string& name, const std::stri
 }
 
 double double_attribute(hid_t obj, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   return numeric_attribute<double>(obj, name, file, H5T_FLOAT, "number");
 }
 std::int64_t int_attribute(hid_t obj, const std::string& name, const std::string& file) {
+  const LibraryLock lock;
   return numeric_attribute<std::int64_t>(obj, name, file, H5T_INTEGER, "integer");
 }
 

@@ -12,22 +12,51 @@
 // dataset: no space left on the device (disk full)"), not HDF5's raw driver text. A file whose
 // close fails (a full disk at the final flush) does not crash the process at exit: the library's
 // own atexit clean-up, which segfaults on such a file in HDF5 1.10, is then skipped.
-// HDF5's own printing of its error stack is switched off (quiet_errors(), called by every
-// function that opens or creates a file), so a corrupt file gives one exception and no noise.
+// HDF5's own printing of its error stack is switched off (quiet_errors(), done by every function
+// here for its thread), so a corrupt file gives one exception and no noise.
 //
 // Paths are absolute within the file ("/mesh/connectivity"); an attribute is named in errors as
 // its object's path joined with its name ("/format", "/mesh/units").
 //
 // Files written here carry no object time stamps, so the same data give byte-identical files.
+//
+// Threads: every function here and every Handle close (reset(), close(), the destructor, move
+// assignment) holds library_mutex() while it is inside HDF5, so no two threads of the process are
+// ever in the HDF5 library at once, whatever its build. This is what lets several runs share a
+// process (sinew-sweep --concurrent K) and the simulator write frames on a background thread
+// (frame_writer.hpp) with the serial HDF5 of Ubuntu (1.10, not built thread-safe), where two
+// threads in HDF5 at once corrupt its global state (ID table, metadata cache, error stack). On a
+// thread-safe build (Debian's) HDF5's own global lock serialises the same way, so nothing is lost:
+// HDF5 I/O never overlaps across threads either way; a frame write waits for another run's read.
+// The lock is taken once per call (recursive: the functions here call each other) and is held
+// through the whole call, so HDF5's error stack, global on a serial build, is read by the thread
+// that filled it. Code outside formats/ makes no HDF5 call of its own (only the tests do), so
+// nothing bypasses the lock; hdf5_heap_check.cpp takes it too.
 #include <hdf5.h>
 
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <vector>
 
 namespace sinew::formats::hdf5 {
 
-// An owned hid_t, closed with its matching H5*close function on destruction.
+// The process-wide lock around every HDF5 call (see "Threads" above). Recursive, never destroyed
+// (so a handle closed during static destruction or from a thread at exit still finds it).
+std::recursive_mutex& library_mutex();
+// Holds library_mutex() for its scope (the first line of every function that calls HDF5) and
+// switches HDF5's error printing off for the calling thread (quiet_errors()).
+class LibraryLock {
+ public:
+  LibraryLock();
+  LibraryLock(const LibraryLock&) = delete;
+  LibraryLock& operator=(const LibraryLock&) = delete;
+
+ private:
+  std::lock_guard<std::recursive_mutex> guard_;
+};
+
+// An owned hid_t, closed with its matching H5*close function on destruction (under the lock).
 class Handle {
  public:
   using Closer = herr_t (*)(hid_t);
@@ -51,7 +80,9 @@ class Handle {
   Closer closer_ = nullptr;
 };
 
-// Silences HDF5's automatic error-stack printing (once per process).
+// Silences HDF5's automatic error-stack printing for the calling thread (once per thread: a
+// thread-safe HDF5 keeps this setting per thread, a serial one per process). LibraryLock does it,
+// so every function here has called it before it calls HDF5.
 void quiet_errors();
 // HDF5's innermost message on the current error stack as " (HDF5: message)", or "" when the stack
 // is empty; clears the stack.

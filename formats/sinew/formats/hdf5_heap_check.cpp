@@ -229,6 +229,7 @@ void check_vlen_string_type(const RawFile& raw,
 }  // namespace
 
 void check_vlen_dataset(hid_t dataset, const std::string& file, const std::string& name) {
+  const LibraryLock lock;
   Handle dcpl(H5Dget_create_plist(dataset), H5Pclose);
   if (!dcpl.valid() || H5Pget_layout(dcpl) != H5D_CONTIGUOUS) {
     throw FormatError(file, name,
@@ -323,6 +324,7 @@ void check_attribute_messages(hid_t obj, const std::string& file, const std::str
 
 void check_global_heaps(hid_t obj, const std::string& file, const std::string& where,
                         const std::string& attribute) {
+  const LibraryLock lock;
   RawFile raw(obj, file, where);
   // In an unchecksummed header, the attribute's own heap reference: length, collection, index.
   if (const auto header = header_address(obj)) {

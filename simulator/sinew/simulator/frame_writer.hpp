@@ -9,8 +9,9 @@
 // either way: the fields come from the frame's own copy of u(n) and activations.
 //
 // The ResultsWriter is touched only by the worker while frames are pending; finish() returns once
-// every handed frame is in the file (before a checkpoint: HDF5 is not used from two threads at
-// once, and a checkpoint must never lie ahead of the frames on disk). A worker's error (a full disk)
+// every handed frame is in the file (before a checkpoint: the run's files are not used from two
+// threads at once, and a checkpoint must never lie ahead of the frames on disk). HDF5 calls of
+// other threads (other runs of a sweep) are serialised by formats' lock (hdf5_file.hpp). A worker's error (a full disk)
 // is rethrown on the caller's thread by the next push() or finish(); frames after it are dropped.
 #include <condition_variable>
 #include <cstdint>

@@ -1,6 +1,5 @@
 #include "sinew/sweep/run_sweep.hpp"
 
-#include <hdf5.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -164,18 +163,6 @@ void SweepProgress::finished(const Row& row) {
             row.message.empty() ? "" : ": " + row.message.substr(0, 200));
 }
 
-void check_thread_safe_hdf5(int concurrent) {
-  if (concurrent <= 1) return;
-  hbool_t safe = 0;
-  H5is_library_threadsafe(&safe);
-  if (!safe) {
-    throw ResourceError("", "concurrent",
-                        "this HDF5 library is not thread-safe, so runs cannot share a process: "
-                        "use concurrent: 1 (several MPI ranks per GPU instead), or an HDF5 built "
-                        "with --enable-threadsafe (Debian's libhdf5 is)");
-  }
-}
-
 std::vector<std::size_t> start_sweep(const Sweep& sweep, const SweepOptions& options,
                                      SweepReport& report) {
   std::error_code ec;
@@ -199,7 +186,6 @@ std::vector<std::size_t> start_sweep(const Sweep& sweep, const SweepOptions& opt
 
 SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options) {
   const int concurrent = std::max(1, options.settings.concurrent);
-  check_thread_safe_hdf5(concurrent);
   SweepReport report;
   const auto pending = start_sweep(sweep, options, report);
 

@@ -12,8 +12,9 @@
 //
 // Concurrency: `concurrent` runs at once in threads of this process, each with its own engine
 // (on one GPU, each CUDA engine has its own streams, so small models share the GPU). The runner's
-// libraries are safe for this: the logger is spdlog's thread-safe one; HDF5 is Debian's
-// thread-safe build (checked at the start: check_thread_safe_hdf5); the interrupt flag is atomic.
+// libraries are safe for this: the logger is spdlog's thread-safe one; every HDF5 call goes
+// through formats' one lock (hdf5_file.hpp), so any HDF5 build works, thread-safe or not, and the
+// runs' HDF5 I/O does not overlap; the interrupt flag is atomic.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -73,9 +74,5 @@ std::vector<std::size_t> start_sweep(const Sweep& sweep, const SweepOptions& opt
 // Runs the sweep in this process: `concurrent` runs at once. Writes the table as runs finish
 // (at most every few seconds) and at the end.
 SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options);
-
-// Throws ResourceError when several runs would share a process with an HDF5 library that is not
-// thread-safe (concurrent > 1 needs it).
-void check_thread_safe_hdf5(int concurrent);
 
 }  // namespace sinew::sweep

@@ -173,7 +173,6 @@ void MpiSession::abort(int code) const {
 SweepReport run_sweep_mpi(const Sweep& sweep, SweepOptions options, const MpiSession& session) {
   if (session.size() < 2)
     throw ConfigError("", "mpirun -n", "an MPI sweep needs at least 2 ranks (rank 0 hands out)");
-  check_thread_safe_hdf5(options.settings.concurrent);
   if (session.rank() == 0) return manage(sweep, options, session.size() - 1);
   options.ranks_on_machine = local_size();
   if (const int gpus = simulator::cuda_device_count(); gpus > 0 && options.settings.device != "cpu")
