@@ -638,6 +638,7 @@ std::vector<ChunkExtent> chunk_extents(hid_t dataset, const std::string& file,
   // A damaged chunk address (one flipped byte of a results file in a fuzz case) put a chunk past
   // the file's end or over another one; freeing it on a resume left HDF5's free-space manager to
   // crash when the file was closed.
+  const LibraryLock lock;
   std::vector<ChunkExtent> out;
   Handle dcpl(H5Dget_create_plist(dataset), H5Pclose);
   if (!dcpl.valid() || H5Pget_layout(dcpl) != H5D_CHUNKED) return out;
