@@ -31,7 +31,7 @@ inline std::mutex& capture_mutex() {
 // cudaDeviceSynchronize under capture_mutex().
 inline void device_synchronize() {
   std::lock_guard lock(capture_mutex());
-  device_synchronize();
+  SINEW_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
 }  // namespace sinew::simulator::cuda
