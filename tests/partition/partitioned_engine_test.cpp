@@ -39,10 +39,20 @@ void expect_same_bits(const std::vector<double>& a, const std::vector<double>& b
         << what << "[" << i << "]: " << a[i] << " vs " << b[i] << " on " << ranks() << " ranks";
 }
 
-void expect_same_energies(const simulator::Energies& a, const simulator::Energies& b) {
-  expect_same_bits({a.kinetic, a.strain, a.hourglass, a.external_work, a.time},
-                   {b.kinetic, b.strain, b.hourglass, b.external_work, b.time}, "energies");
+// with_work: compare the external work too. Not where the model slides or has sliding planes:
+// the one-device engines now count the projections' work (docs/physics.md, "Instability"), the
+// partitioned engine not yet (docs/multi-gpu.md, "What remains"); u, v and the other energies are
+// the same bits there too.
+void expect_same_energies(const simulator::Energies& a, const simulator::Energies& b,
+                          bool with_work = true) {
+  expect_same_bits({a.kinetic, a.strain, a.hourglass, a.time},
+                   {b.kinetic, b.strain, b.hourglass, b.time}, "energies");
+  if (with_work) expect_same_bits({a.external_work}, {b.external_work}, "external work");
   EXPECT_EQ(a.step, b.step);
+}
+
+bool projections_work(const formats::Model& m, const SimSetup& s) {
+  return (s.effects.sliding && !m.sliding.empty()) || !s.sliding_planes.empty();
 }
 
 // Runs both engines `steps` steps in batches and compares state, velocities, energies, forces and
@@ -51,7 +61,7 @@ double compare(const formats::Model& m, const SimSetup& s, std::int64_t steps, i
   auto one = simulator::make_cpu_backend(m, s);
   auto parts = make_partitioned_cpu_backend(m, s, MPI_COMM_WORLD);
   EXPECT_EQ(one->dt(), parts->dt());
-  expect_same_energies(one->energies(), parts->energies());
+  expect_same_energies(one->energies(), parts->energies(), !projections_work(m, s));
   double moved = 0;
   for (int b = 0; b < batches; ++b) {
     one->step(steps / batches);
@@ -60,7 +70,7 @@ double compare(const formats::Model& m, const SimSetup& s, std::int64_t steps, i
     const auto u = one->displacements();
     expect_same_bits(u, parts->displacements(), "u(n)");
     expect_same_bits(one->velocities(), parts->velocities(), "v(n)");
-    expect_same_energies(one->energies(), parts->energies());
+    expect_same_energies(one->energies(), parts->energies(), !projections_work(m, s));
     for (double x : u) moved = std::max(moved, std::abs(x));
   }
   expect_same_bits(one->internal_forces(), parts->internal_forces(), "f");
@@ -217,7 +227,7 @@ TEST(PartitionedEngineForehead, OneMillimetreBrowRaiseGivesTheOneDeviceBits) {
   auto one = simulator::make_cpu_backend(m, s);
   one->step(60);
   expect_same_bits(one->displacements(), u, "u(n)");
-  expect_same_energies(one->energies(), e);
+  expect_same_energies(one->energies(), e, !projections_work(m, s));
   double moved = 0;
   for (double x : u) moved = std::max(moved, std::abs(x));
   EXPECT_GT(moved, 1e-8);
