@@ -48,6 +48,11 @@ int simulate(const sinew::simulator::RunOptions& opt, int rank) {
   using namespace sinew;
   try {
     const auto result = simulator::run_scene(opt);
+    if (!result.ran) return tool::kExitOk;
+    if (result.summary.status == "interrupted") {  // as sinew-simulate: resume with --restart
+      if (rank == 0) tool::report_error("sinew-simulate-parts", result.summary.message);
+      return tool::kExitInterrupted;
+    }
     if (rank == 0)
       log::info("done: {} steps of {:.6g} s, {} frames, {:.3g} s wall ({:.3g} ms/step) -> {}",
                 result.summary.steps_done, result.summary.dt, result.summary.frames,
