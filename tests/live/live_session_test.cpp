@@ -87,7 +87,6 @@ std::vector<float> frame_floats(const Session& s) {
 }
 
 TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
-  const bool cuda = GetParam() == "cuda";
   TempDir dir("live_session");
   testing::write_live_case(dir.str());
   const auto scene = dir / "live_box.yaml";
@@ -114,18 +113,14 @@ TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
     drag.point = {0.024, 0.004, 0.006};  // the free end's top edge
     drag.force = {0, 0, 0.004};
     drag.radius = 0.0025;
-    if (cuda) {
-      EXPECT_THROW(session.submit(drag), ProtocolError);
-    } else {
-      session.submit(drag);
-      step(session, 30);
-      drag.force = {0, 0.002, 0.006};  // the mouse moves: same nodes, new force
-      session.submit(drag);
-      step(session, 25);
-      Command release;
-      release.kind = Command::Kind::release;
-      session.submit(release);
-    }
+    session.submit(drag);
+    step(session, 30);
+    drag.force = {0, 0.002, 0.006};  // the mouse moves: same nodes, new force
+    session.submit(drag);
+    step(session, 25);
+    Command release;
+    release.kind = Command::Kind::release;
+    session.submit(release);
     step(session, 20);
     activate(session, std::nullopt);  // back to the curve inside its ramp
     step(session, 50);
@@ -171,7 +166,6 @@ TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
 }
 
 TEST_P(LiveSession, SliderAndDragMoveTheSkin) {
-  if (GetParam() == "cuda") GTEST_SKIP() << "drag forces are CPU-only (docs/live.md)";
   TempDir dir("live_steer");
   const auto o = case_options(dir, GetParam());
   auto run = simulator::load_run(o, make_live_setup);
@@ -207,7 +201,6 @@ TEST_P(LiveSession, SliderAndDragMoveTheSkin) {
 }
 
 TEST_P(LiveSession, InstabilityPausesWithTheEnginesMessageAndResetRecovers) {
-  if (GetParam() == "cuda") GTEST_SKIP() << "drag forces are CPU-only (docs/live.md)";
   TempDir dir("live_unstable");
   const auto o = case_options(dir, GetParam());
   SessionOptions so;

@@ -67,15 +67,12 @@ class CudaEngine final : public Backend, public CudaTiming {
   std::optional<double> activation_override(std::size_t m) const override {
     return core_.activation_override(m);
   }
-  // Live force slots would re-upload the constraint program under captured graphs: not built yet.
-  std::size_t force_slot_count() const override { return 0; }
-  void set_force_slot(std::size_t, const std::vector<Index>&,
-                      const std::array<double, 3>&) override {
-    throw ConfigError("", "drag",
-                      "drag forces are not available on the CUDA backend yet (docs/live.md); use "
-                      "--device cpu to drag");
-  }
-  void clear_force_slot(std::size_t) override {}
+  // Live force slots (docs/live.md): the core's program rebuilt and uploaded between calls; a new
+  // node set recaptures the step graphs, a new force alone overwrites the per-set forces in place.
+  std::size_t force_slot_count() const override { return core_.force_slot_count(); }
+  void set_force_slot(std::size_t k, const std::vector<Index>& nodes,
+                      const std::array<double, 3>& force) override;
+  void clear_force_slot(std::size_t k) override;
   Frame frame(bool with_fields) override;
   bool host_idle_while_stepping() const override { return true; }
 
@@ -119,6 +116,9 @@ class CudaEngine final : public Backend, public CudaTiming {
   std::vector<std::pair<std::string, float>> stage_times(int repeats) override;
   cudaGraphExec_t capture_steps(int count);
   void build_graph();
+  // After a force slot changed in the core: the program uploaded again (all of it when the slot's
+  // nodes changed, then the graphs recaptured; else only the per-set forces, in place).
+  void reload_program(bool nodes_changed);
   void run_direct_step();  // one step with its scalars, synchronised and checked
   void snapshot();
   void roll_back();

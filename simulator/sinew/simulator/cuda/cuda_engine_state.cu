@@ -251,6 +251,53 @@ double CudaEngine<T>::bytes_per_step() const {
   return b;
 }
 
+template <typename T>
+void CudaEngine<T>::set_force_slot(std::size_t k, const std::vector<Index>& nodes,
+                                   const std::array<double, 3>& force) {
+  const auto& forces = core_.prepared().forces;
+  const std::size_t set = forces.size() - core_.force_slot_count() + k;
+  const std::vector<Index> before = k < core_.force_slot_count() ? forces[set].nodes
+                                                                 : std::vector<Index>{};
+  const std::array<double, 3> force_before =
+      k < core_.force_slot_count() ? forces[set].per_node : std::array<double, 3>{};
+  core_.set_force_slot(k, nodes, force);  // checks k, the ids and the force
+  // The slot's curve turns from 0 to 1 when it is first given nodes: the factor rows come from
+  // the core at each step() call, so only the program needs the device.
+  if (forces[set].nodes != before || forces[set].per_node != force_before)
+    reload_program(forces[set].nodes != before);
+}
+
+template <typename T>
+void CudaEngine<T>::clear_force_slot(std::size_t k) {
+  const auto& forces = core_.prepared().forces;
+  const bool had_nodes =
+      k < core_.force_slot_count() &&
+      !forces[forces.size() - core_.force_slot_count() + k].nodes.empty();
+  core_.clear_force_slot(k);
+  if (had_nodes) reload_program(true);
+}
+
+template <typename T>
+void CudaEngine<T>::reload_program(bool nodes_changed) {
+  // The queued steps read the program: they finish first.
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  arrays_.constraints = make_constraint_program<T>(core_.prepared());
+  const ConstraintArrays<T>& program = arrays_.constraints;
+  if (!nodes_changed) {
+    // Same sets, same size: the captured graphs keep reading this array.
+    SINEW_CUDA_CHECK(cudaMemcpy(force_per_node_.get(), program.force_per_node.data(),
+                                force_per_node_.bytes(), cudaMemcpyHostToDevice));
+    return;
+  }
+  node_op_offset_.upload(program.node_op_offset);
+  con_node_.upload(program.node);
+  con_offset_.upload(program.offset);
+  con_op_.upload(program.op);
+  force_per_node_.upload(program.force_per_node);
+  // The graphs hold the old arrays and counts (constraint_data() by value): capture them again.
+  build_graph();
+}
+
 // Each file of the engine instantiates the members it defines (cuda_engine.cuh).
 template class CudaEngine<float>;
 template class CudaEngine<double>;
