@@ -216,8 +216,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
 
 template <typename T>
 CudaEngine<T>::~CudaEngine() {
-  if (graph_) cudaGraphExecDestroy(graph_);
-  if (short_graph_) cudaGraphExecDestroy(short_graph_);
+  destroy_graphs();
   if (copy_ready_) cudaEventDestroy(copy_ready_);
   if (stream_) cudaStreamDestroy(stream_);
   if (copy_stream_) cudaStreamDestroy(copy_stream_);

@@ -114,8 +114,20 @@ class CudaEngine final : public Backend, public CudaTiming {
                    std::vector<std::pair<std::string, cudaEvent_t>>* marks = nullptr,
                    bool programmatic = false);
   std::vector<std::pair<std::string, float>> stage_times(int repeats) override;
-  cudaGraphExec_t capture_steps(int count);
+  // ahead: the sliding lists refreshed ahead of the steps (slide_ahead_), else inline.
+  cudaGraphExec_t capture_steps(int count, bool ahead);
   void build_graph();
+  void destroy_graphs() {
+    for (cudaGraphExec_t* g : {&graph_, &short_graph_, &inline_graph_, &inline_short_graph_})
+      if (*g) {
+        cudaGraphExecDestroy(*g);
+        *g = nullptr;
+      }
+  }
+  // Queues steps from step_ to chunk_end: these graphs at aligned steps, single launches between;
+  // true when a graph ran. read_status: the status flags after the queued work (syncs).
+  bool queue_steps(std::int64_t chunk_end, cudaGraphExec_t graph, cudaGraphExec_t short_graph);
+  StepStatus read_status();
   // After a force slot changed in the core: the program uploaded again (all of it when the slot's
   // nodes changed, then the graphs recaptured; else only the per-set forces, in place).
   void reload_program(bool nodes_changed);
@@ -171,6 +183,9 @@ class CudaEngine final : public Backend, public CudaTiming {
   bool programmatic_ = false;
   cudaGraphExec_t graph_ = nullptr;        // batch_ steps
   cudaGraphExec_t short_graph_ = nullptr;  // align_ steps (null when align_ = batch_)
+  // The same with the sliding lists refreshed inline, for replaying a chunk with a list miss;
+  // captured at the first miss (recaptured after build_graph).
+  cudaGraphExec_t inline_graph_ = nullptr, inline_short_graph_ = nullptr;
 
   // elements
   DeviceArray<std::array<Index, 8>> elem_nodes_;

@@ -235,14 +235,14 @@ std::vector<std::pair<std::string, float>> CudaEngine<T>::stage_times(int repeat
 // The graph of a batch of `count` steps starting at a step ≡ 0 (mod align_), a multiple of 3 and
 // of the energy interval: its scalars in slots 0 .. count − 1.
 template <typename T>
-cudaGraphExec_t CudaEngine<T>::capture_steps(int count) {
+cudaGraphExec_t CudaEngine<T>::capture_steps(int count, bool ahead) {
   // No other engine's device-wide sync while this stream captures (cuda_check.cuh).
   std::lock_guard lock(capture_mutex());
   cudaGraph_t g = nullptr;
   SINEW_CUDA_CHECK(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
   try {
     for (int k = 0; k < count; ++k)
-      launch_step(k, k, stream_, slide_ahead_, graph_blowup_ && k % interval_ == 0, nullptr,
+      launch_step(k, k, stream_, ahead, graph_blowup_ && k % interval_ == 0, nullptr,
                   programmatic_);
   } catch (...) {
     cudaStreamEndCapture(stream_, &g);
@@ -262,13 +262,9 @@ cudaGraphExec_t CudaEngine<T>::capture_steps(int count) {
 // launches).
 template <typename T>
 void CudaEngine<T>::build_graph() {
-  for (cudaGraphExec_t* g : {&graph_, &short_graph_})
-    if (*g) {
-      cudaGraphExecDestroy(*g);
-      *g = nullptr;
-    }
-  graph_ = capture_steps(batch_);
-  if (align_ < batch_) short_graph_ = capture_steps(int(align_));
+  destroy_graphs();
+  graph_ = capture_steps(batch_, slide_ahead_);
+  if (align_ < batch_) short_graph_ = capture_steps(int(align_), slide_ahead_);
 }
 
 template <typename T>
@@ -341,11 +337,13 @@ void CudaEngine<T>::run_direct_step() {
 
 // Steps are queued without host synchronisation: graph batches where a batch fits at an aligned
 // step, single launched steps elsewhere (their blow-up tests on the device, as in the graph), up to
-// kQueuedBatches batches' worth, then one sync reads the status flags. A flag replays the queued
-// steps one by one from the snapshot with the host's checks at each step, so the failing step
-// throws with the state at the last good step (as a step-by-step run would); a device energy sum
-// that crossed the bound only by its summation order replays without failing. Results are the same
-// bits as synchronising after every step: the same kernels run in the same order on the same data.
+// kQueuedBatches batches' worth, then one sync reads the status flags. A list miss alone replays
+// the queued steps from the snapshot, queued again through graphs that refresh the sliding lists
+// inline (no miss is possible there); any other flag (or one raised in that replay) replays them
+// one by one with the host's checks at each step, so the failing step throws with the state at the
+// last good step (as a step-by-step run would); a device energy sum that crossed the bound only by
+// its summation order replays without failing. Results are the same bits as synchronising after
+// every step: the same kernels run in the same order on the same data, and the lists are a cache.
 template <typename T>
 void CudaEngine<T>::step(std::int64_t n) {
   const std::int64_t end = step_ + n;
@@ -354,35 +352,9 @@ void CudaEngine<T>::step(std::int64_t n) {
     const std::int64_t chunk_end = std::min(end, step_ + std::int64_t(kQueuedBatches) * batch_);
     snapshot();
     SINEW_CUDA_CHECK(cudaMemsetAsync(status_.get(), 0, sizeof(StepStatus), stream_));
-    bool graphs = false;
-    while (step_ < chunk_end) {
-      if (step_ % align_ == 0 && chunk_end - step_ >= batch_) {
-        fill_scalars(step_, batch_, 0);
-        SINEW_CUDA_CHECK(cudaGraphLaunch(graph_, stream_));
-        step_ += batch_;
-        graphs = true;
-      } else if (short_graph_ && step_ % align_ == 0 && chunk_end - step_ >= align_) {
-        fill_scalars(step_, int(align_), 0);
-        SINEW_CUDA_CHECK(cudaGraphLaunch(short_graph_, stream_));
-        step_ += align_;
-        graphs = true;
-      } else {
-        // Between the aligned stretches (outputs at any step): single launches, refreshing the
-        // sliding lists inline. Measured on an H100 and dropped (docs/performance.md): these steps
-        // with their lists refreshed ahead and programmatic launches (the 0.5 mm brow raise's
-        // steps 13% slower), and graphs captured per (phase, length) for these stretches (the
-        // 1 mm brow raise's steps 20% slower: about 60 captures; the 0.5 mm one unchanged).
-        fill_scalars(step_, 1, int(batch_));
-        launch_step(step_, int(batch_), stream_, false, graph_blowup_ && step_ % interval_ == 0);
-        ++step_;
-      }
-    }
-    SINEW_CUDA_CHECK(cudaMemcpyAsync(status_host_.get(), status_.get(), sizeof(StepStatus),
-                                     cudaMemcpyDeviceToHost, stream_));
-    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
-    ring_next_ = 0;  // every staged copy has run
-    const StepStatus st = *status_host_.get();
-    const bool failed = st.bad_jacobian || st.bad_displacement || st.blowup;
+    const bool graphs = queue_steps(chunk_end, graph_, short_graph_);
+    StepStatus st = read_status();
+    bool failed = st.bad_jacobian || st.bad_displacement || st.blowup;
     if (st.slide_miss && !failed && graphs && ++slide_miss_batches_ >= 2) {
       // Nodes outrun the lists refreshed ahead: from now on the graph refreshes them twice as
       // often, and once every step did not suffice (nodes moving more than s/2 per step), inline
@@ -394,8 +366,22 @@ void CudaEngine<T>::step(std::int64_t n) {
       slide_miss_batches_ = 0;
       build_graph();
     }
-    if (failed || st.slide_miss) {
-      // Direct steps refresh the sliding lists inline: a slide miss replays to the same results.
+    if (st.slide_miss && !failed) {
+      // The chunk again with the lists refreshed inline: at graph speed rather than as single
+      // synchronised steps (a chunk is up to kQueuedBatches batches: on the 1 mm brow raise in
+      // long calls, replays one by one tripled the run's step time; docs/cuda-backend.md).
+      if (!inline_graph_) {
+        inline_graph_ = capture_steps(batch_, false);
+        if (align_ < batch_) inline_short_graph_ = capture_steps(int(align_), false);
+      }
+      step_ = chunk_start;
+      roll_back();
+      queue_steps(chunk_end, inline_graph_, inline_short_graph_);
+      st = read_status();
+      failed = st.bad_jacobian || st.bad_displacement || st.blowup || st.slide_miss;
+    }
+    if (failed) {
+      // Direct steps refresh the sliding lists inline and check each step on the host.
       step_ = chunk_start;
       roll_back();
       while (step_ < chunk_end) {
@@ -409,6 +395,44 @@ void CudaEngine<T>::step(std::int64_t n) {
     if (!graph_blowup_ && (step_ - 1) / interval_ * interval_ >= chunk_start)
       check_blowup(external_work());
   }
+}
+
+template <typename T>
+bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, cudaGraphExec_t graph,
+                                cudaGraphExec_t short_graph) {
+  bool graphs = false;
+  while (step_ < chunk_end) {
+    if (step_ % align_ == 0 && chunk_end - step_ >= batch_) {
+      fill_scalars(step_, batch_, 0);
+      SINEW_CUDA_CHECK(cudaGraphLaunch(graph, stream_));
+      step_ += batch_;
+      graphs = true;
+    } else if (short_graph && step_ % align_ == 0 && chunk_end - step_ >= align_) {
+      fill_scalars(step_, int(align_), 0);
+      SINEW_CUDA_CHECK(cudaGraphLaunch(short_graph, stream_));
+      step_ += align_;
+      graphs = true;
+    } else {
+      // Between the aligned stretches (outputs at any step): single launches, refreshing the
+      // sliding lists inline. Measured on an H100 and dropped (docs/performance.md): these steps
+      // with their lists refreshed ahead and programmatic launches (the 0.5 mm brow raise's
+      // steps 13% slower), and graphs captured per (phase, length) for these stretches (the
+      // 1 mm brow raise's steps 20% slower: about 60 captures; the 0.5 mm one unchanged).
+      fill_scalars(step_, 1, int(batch_));
+      launch_step(step_, int(batch_), stream_, false, graph_blowup_ && step_ % interval_ == 0);
+      ++step_;
+    }
+  }
+  return graphs;
+}
+
+template <typename T>
+StepStatus CudaEngine<T>::read_status() {
+  SINEW_CUDA_CHECK(cudaMemcpyAsync(status_host_.get(), status_.get(), sizeof(StepStatus),
+                                   cudaMemcpyDeviceToHost, stream_));
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  ring_next_ = 0;  // every staged copy has run
+  return *status_host_.get();
 }
 
 template <typename T>
