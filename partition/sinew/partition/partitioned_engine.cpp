@@ -64,6 +64,16 @@ struct StepCheck {
   std::int64_t first_bad = INT_MAX;
 };
 
+// The scalars of constraint entry k's work record (constraint_work): u(n+1), u(n−1) and the
+// projections' moves, then u* of each of its prescribed sets.
+template <typename T>
+int record_size(const simulator::ConstraintArrays<T>& c, std::size_t k) {
+  int size = 9;
+  for (std::int32_t q = c.offset[k]; q < c.offset[k + 1]; ++q)
+    if ((c.op[std::size_t(q)] >> simulator::kOpShift) == simulator::kOpPrescribe) size += 3;
+  return size;
+}
+
 template <typename T>
 class PartitionedCpuEngine final : public simulator::Backend {
  public:
@@ -148,15 +158,16 @@ class PartitionedCpuEngine final : public simulator::Backend {
   void element_forces(const std::vector<std::vector<Index>>& lists);
   template <bool kElastic, bool kMuscle, bool kHourglass>
   void element_list(const std::vector<Index>& list);
-  // Gather, update, loads and constraints of the listed owned nodes into un_ (pre-constraint values
-  // of constrained nodes into ustar_); the lowest node whose update is not finite into `bad`.
+  // Gather, update, loads and constraints of the listed owned nodes into un_ (the projections'
+  // moves of constrained nodes into projected_); the lowest node whose update is not finite into
+  // `bad`.
   void update_nodes(const std::vector<Index>& list, const T* factor, Index& bad);
   simulator::ConstraintData<T> constraint_data() {
     return simulator::host_constraint_data(a_, cd_, prescribed_free_.data(), sliding_);
   }
-  // The external work over this step in the CPU engine's order: the loaded nodes' programs
-  // replayed on every rank from their gathered u* and u(n−1), then the weights' work from every
-  // node's terms, gathered.
+  // The external work over this step in the CPU engine's order: every constrained node's terms
+  // (add_program_work) on every rank from its owner's record, chunk by chunk of constrained
+  // nodes; then the weights' work from every node's terms, gathered.
   double constraint_work(const T* factor);
   // The step's checks merged over the ranks; `bad`: this rank's first non-finite node.
   StepCheck step_check(Index bad);
@@ -177,10 +188,10 @@ class PartitionedCpuEngine final : public simulator::Backend {
   std::vector<Index> boundary_nodes_, interior_nodes_;  // owned: sent to a neighbour, or not
   std::vector<double> jacobian_;                        // E, J of the computed elements
   std::vector<std::int32_t> entry_of_node_;             // N, constraint entry of a node or −1
-  // Constraint entries with nodal forces or prescribed displacements (the only ops adding work),
-  // per owner part.
-  std::vector<std::vector<std::int32_t>> work_entries_of_part_;
-  bool work_ops_ = false;
+  // The constraint entries per owner part (in entry order), and the scalars of their work records
+  // per part (constraint_work: u(n+1), u(n−1), the projections' moves, u* of each prescribed set).
+  std::vector<std::vector<std::int32_t>> entries_of_part_;
+  std::vector<int> record_counts_, record_displs_;
   // Sliding: the CPU engine's state per binding, kept up to date by the binding's owner only; the
   // surfaces (read-only) on every rank.
   simulator::HostSlidingState<T> sliding_;
@@ -188,7 +199,8 @@ class PartitionedCpuEngine final : public simulator::Backend {
   std::vector<std::int32_t> bindings_by_owner_;       // binding ids, part by part
   std::vector<int> owned_counts_, owned_displs_;      // scalars per part (3 per owned node)
   std::vector<T> activation_, scalars_;
-  std::vector<Vec3<T>> elem_force_, f_, prescribed_free_, ustar_;
+  std::vector<Vec3<T>> elem_force_, f_, prescribed_free_;
+  std::vector<Vec3<T>> projected_;  // C, per constraint entry: its projections' moves this step
   std::vector<std::vector<T>> send_buf_, recv_buf_;
   std::vector<Vec3<T>> u_, up_, un_;
   std::int64_t step_ = 0;
@@ -239,27 +251,18 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
   }
   const auto& c = a_.constraints;
   entry_of_node_.assign(n_, -1);
-  work_entries_of_part_.resize(std::size_t(size_));
+  entries_of_part_.resize(std::size_t(size_));
+  record_counts_.assign(std::size_t(size_), 0);
   for (std::size_t k = 0; k < c.node.size(); ++k) {
     entry_of_node_[std::size_t(c.node[k])] = std::int32_t(k);
-    bool work = false, slide = false;
-    for (std::int32_t q = c.offset[k]; q < c.offset[k + 1]; ++q) {
-      const std::int32_t kind = c.op[std::size_t(q)] >> simulator::kOpShift;
-      work = work || kind == simulator::kOpForce || kind == simulator::kOpPrescribe;
-      slide = slide || kind == simulator::kOpSlide;
-    }
-    // The work replay runs the program of loaded nodes on every rank, and a sliding node's lists
-    // live on its owner only.
-    if (work && slide)
-      throw ConfigError("", "forces",
-                        fmt::format("node {} slides and carries a load or prescribed "
-                                    "displacement: not yet supported by the partitioned engine",
-                                    c.node[k]));
-    if (work)
-      work_entries_of_part_[std::size_t(partition_.node_owner[std::size_t(c.node[k])])].push_back(
-          std::int32_t(k));
-    work_ops_ = work_ops_ || work;
+    const int p = partition_.node_owner[std::size_t(c.node[k])];
+    entries_of_part_[std::size_t(p)].push_back(std::int32_t(k));
+    record_counts_[std::size_t(p)] += record_size(c, k);
   }
+  for (int p = 0; p < size_; ++p)
+    record_displs_.push_back(p == 0 ? 0
+                                    : record_displs_.back() + record_counts_[std::size_t(p - 1)]);
+  projected_.assign(c.node.size(), Vec3<T>{T(0), T(0), T(0)});
   sliding_ = simulator::HostSlidingState<T>(a_);
   const std::size_t slides = a_.slide_node.size();
   for (int p = 0; p < size_; ++p) {
@@ -273,7 +276,6 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
   jacobian_.assign(model.element_count(), 0.0);
   elem_force_.assign(a_.elements * 8, Vec3<T>{T(0), T(0), T(0)});
   f_.assign(n_, Vec3<T>{T(0), T(0), T(0)});
-  ustar_ = f_;
   activation_.assign(core_.muscle_count(), T(0));
   scalars_.assign(core_.step_scalar_count(), T(0));
   prescribed_free_.resize(c.prescribed_set.size());
@@ -400,11 +402,12 @@ void PartitionedCpuEngine<T>::update_nodes(const std::vector<Index>& list, const
                 if (!simulator::all_finite(v)) first_bad[c] = std::min(first_bad[c], Index(i));
                 const std::int32_t entry = entry_of_node_[ii];
                 if (entry >= 0) {
-                  ustar_[ii] = v;
-                  double w = 0;  // the work is constraint_work's
-                  v = simulator::run_program<T, kSlide>(cdata, i, cdata.offset[entry],
-                                                        cdata.offset[entry + 1], factor, true, v,
-                                                        up_.data(), false, w);
+                  // Its work is added by constraint_work, on every rank in the one-device order.
+                  Vec3<T>& projected = projected_[std::size_t(entry)];
+                  projected = Vec3<T>{T(0), T(0), T(0)};
+                  v = simulator::run_ops<T, kSlide>(cdata, i, cdata.offset[entry],
+                                                    cdata.offset[entry + 1], factor, true, v,
+                                                    projected);
                 }
                 un_[ii] = v;
               }
@@ -418,44 +421,55 @@ template <typename T>
 double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
   const simulator::ConstraintData<T> d = constraint_data();
   double work = 0;
-  if (work_ops_) {
-    // (u*, u(n−1)) of every loaded entry, from its owner.
-    std::vector<int> counts, displs;
-    for (const auto& e : work_entries_of_part_) {
-      displs.push_back(counts.empty() ? 0 : displs.back() + counts.back());
-      counts.push_back(int(6 * e.size()));
-    }
+  if (d.count > 0) {
+    // Every entry's record from its owner: what add_program_work reads of it.
     std::vector<T> mine;
-    for (std::int32_t k : work_entries_of_part_[std::size_t(rank_)]) {
+    mine.reserve(std::size_t(record_counts_[std::size_t(rank_)]));
+    auto put = [&](const Vec3<T>& x) {
+      for (int c = 0; c < 3; ++c) mine.push_back(x[c]);
+    };
+    for (std::int32_t k : entries_of_part_[std::size_t(rank_)]) {
       const std::size_t i = std::size_t(d.node[k]);
-      for (int c = 0; c < 3; ++c) mine.push_back(ustar_[i][c]);
-      for (int c = 0; c < 3; ++c) mine.push_back(up_[i][c]);
+      put(un_[i]);
+      put(up_[i]);
+      put(projected_[std::size_t(k)]);
+      for (std::int32_t q = d.offset[k]; q < d.offset[k + 1]; ++q)
+        if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
+          put(prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)]);
     }
-    std::vector<T> all(std::size_t(displs.back() + counts.back()));
+    std::vector<T> all(std::size_t(record_displs_.back() + record_counts_.back()));
     check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), mpi_scalar<T>(), all.data(),
-                             counts.data(), displs.data(), mpi_scalar<T>(), comm_),
-              "MPI_Allgatherv (loaded nodes)");
-    std::vector<Vec3<T>> vstar(std::size_t(d.count));
-    std::vector<char> loaded(std::size_t(d.count), 0);
-    for (std::size_t p = 0; p < work_entries_of_part_.size(); ++p) {
-      const T* from = all.data() + displs[p];
-      for (std::size_t j = 0; j < work_entries_of_part_[p].size(); ++j) {
-        const std::size_t k = std::size_t(work_entries_of_part_[p][j]);
-        vstar[k] = {from[6 * j], from[6 * j + 1], from[6 * j + 2]};
-        // u(n−1) of a loaded node is now its owner's (its true value, on every rank).
-        up_[std::size_t(d.node[k])] = {from[6 * j + 3], from[6 * j + 4], from[6 * j + 5]};
-        loaded[k] = 1;
+                             record_counts_.data(), record_displs_.data(), mpi_scalar<T>(), comm_),
+              "MPI_Allgatherv (constraint work)");
+    // Unpacked by entry: u(n+1), u(n−1), the projections' moves; u* into prescribed_free_ (the
+    // owner's values; this rank's own entries get theirs back).
+    std::vector<Vec3<T>> v(std::size_t(d.count)), vp(v.size()), projected(v.size());
+    for (int p = 0; p < size_; ++p) {
+      const T* from = all.data() + record_displs_[std::size_t(p)];
+      auto get = [&] {
+        const Vec3<T> x{from[0], from[1], from[2]};
+        from += 3;
+        return x;
+      };
+      for (std::int32_t k : entries_of_part_[std::size_t(p)]) {
+        v[std::size_t(k)] = get();
+        vp[std::size_t(k)] = get();
+        projected[std::size_t(k)] = get();
+        for (std::int32_t q = d.offset[k]; q < d.offset[k + 1]; ++q)
+          if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
+            prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)] = get();
       }
     }
-    // The CPU engine's apply_constraints, chunk by chunk; the other entries add nothing.
+    // The CPU engine's apply_constraints sums: term by term within a chunk of 1024 entries, then
+    // the chunks in order.
     std::vector<double> partial(simulator::chunk_count(std::size_t(d.count)), 0.0);
     for (std::size_t c = 0; c < partial.size(); ++c) {
       double w = 0;
       const std::size_t end = std::min(std::size_t(d.count), (c + 1) * kChunk);
       for (std::size_t k = c * kChunk; k < end; ++k)
-        if (loaded[k])
-          simulator::run_program<T, 0>(d, d.node[k], d.offset[k], d.offset[k + 1], factor, true,
-                                       vstar[k], up_.data(), true, w);
+        if (d.offset[k] < d.offset[k + 1])
+          simulator::add_program_work(d, d.node[k], d.offset[k], d.offset[k + 1], factor, v[k],
+                                      vp[k], projected[k], w);
       partial[c] = w;
     }
     for (double p : partial) work += p;
