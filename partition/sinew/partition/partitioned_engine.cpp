@@ -192,6 +192,10 @@ class PartitionedCpuEngine final : public simulator::Backend {
   // per part (constraint_work: u(n+1), u(n−1), the projections' moves, u* of each prescribed set).
   std::vector<std::vector<std::int32_t>> entries_of_part_;
   std::vector<int> record_counts_, record_displs_;
+  std::vector<std::size_t> record_at_;    // C, where entry k's record starts in records_
+  std::vector<T> records_;                // every entry's record, gathered by part
+  std::vector<std::size_t> gathered_at_;  // N, node i's first scalar in an owned-values gather
+  std::vector<double> gravity_terms_;     // every node's 3 weight work terms, gathered by part
   // Sliding: the CPU engine's state per binding, kept up to date by the binding's owner only; the
   // surfaces (read-only) on every rank.
   simulator::HostSlidingState<T> sliding_;
@@ -259,10 +263,24 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
     entries_of_part_[std::size_t(p)].push_back(std::int32_t(k));
     record_counts_[std::size_t(p)] += record_size(c, k);
   }
-  for (int p = 0; p < size_; ++p)
+  record_at_.resize(c.node.size());
+  for (int p = 0; p < size_; ++p) {
     record_displs_.push_back(p == 0 ? 0
                                     : record_displs_.back() + record_counts_[std::size_t(p - 1)]);
+    std::size_t at = std::size_t(record_displs_.back());
+    for (std::int32_t k : entries_of_part_[std::size_t(p)]) {
+      record_at_[std::size_t(k)] = at;
+      at += std::size_t(record_size(c, std::size_t(k)));
+    }
+  }
+  records_.resize(std::size_t(record_displs_.back() + record_counts_.back()));
   projected_.assign(c.node.size(), Vec3<T>{T(0), T(0), T(0)});
+  gathered_at_.resize(n_);
+  for (const auto& p : partition_.parts)
+    for (std::size_t k = 0; k < p.owned_nodes.size(); ++k)
+      gathered_at_[std::size_t(p.owned_nodes[k])] =
+          std::size_t(owned_displs_[std::size_t(p.index)]) + 3 * k;
+  if (setup.effects.gravity) gravity_terms_.resize(3 * n_);
   sliding_ = simulator::HostSlidingState<T>(a_);
   const std::size_t slides = a_.slide_node.size();
   for (int p = 0; p < size_; ++p) {
@@ -422,13 +440,13 @@ double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
   const simulator::ConstraintData<T> d = constraint_data();
   double work = 0;
   if (d.count > 0) {
-    // Every entry's record from its owner: what add_program_work reads of it.
-    std::vector<T> mine;
-    mine.reserve(std::size_t(record_counts_[std::size_t(rank_)]));
-    auto put = [&](const Vec3<T>& x) {
-      for (int c = 0; c < 3; ++c) mine.push_back(x[c]);
-    };
+    // Every entry's record from its owner (what add_program_work reads of it), this rank's written
+    // in place into the gathered buffer.
     for (std::int32_t k : entries_of_part_[std::size_t(rank_)]) {
+      T* to = records_.data() + record_at_[std::size_t(k)];
+      auto put = [&](const Vec3<T>& x) {
+        for (int c = 0; c < 3; ++c) *to++ = x[c];
+      };
       const std::size_t i = std::size_t(d.node[k]);
       put(un_[i]);
       put(up_[i]);
@@ -437,39 +455,31 @@ double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
         if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
           put(prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)]);
     }
-    std::vector<T> all(std::size_t(record_displs_.back() + record_counts_.back()));
-    check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), mpi_scalar<T>(), all.data(),
+    check_mpi(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, records_.data(),
                              record_counts_.data(), record_displs_.data(), mpi_scalar<T>(), comm_),
               "MPI_Allgatherv (constraint work)");
-    // Unpacked by entry: u(n+1), u(n−1), the projections' moves; u* into prescribed_free_ (the
-    // owner's values; this rank's own entries get theirs back).
-    std::vector<Vec3<T>> v(std::size_t(d.count)), vp(v.size()), projected(v.size());
-    for (int p = 0; p < size_; ++p) {
-      const T* from = all.data() + record_displs_[std::size_t(p)];
-      auto get = [&] {
-        const Vec3<T> x{from[0], from[1], from[2]};
-        from += 3;
-        return x;
-      };
-      for (std::int32_t k : entries_of_part_[std::size_t(p)]) {
-        v[std::size_t(k)] = get();
-        vp[std::size_t(k)] = get();
-        projected[std::size_t(k)] = get();
-        for (std::int32_t q = d.offset[k]; q < d.offset[k + 1]; ++q)
-          if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
-            prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)] = get();
-      }
-    }
     // The CPU engine's apply_constraints sums: term by term within a chunk of 1024 entries, then
-    // the chunks in order.
+    // the chunks in order. u* of a prescribed set goes into prescribed_free_ (the owner's value;
+    // this rank's own entries get theirs back), where add_program_work reads it.
     std::vector<double> partial(simulator::chunk_count(std::size_t(d.count)), 0.0);
     for (std::size_t c = 0; c < partial.size(); ++c) {
       double w = 0;
       const std::size_t end = std::min(std::size_t(d.count), (c + 1) * kChunk);
-      for (std::size_t k = c * kChunk; k < end; ++k)
-        if (d.offset[k] < d.offset[k + 1])
-          simulator::add_program_work(d, d.node[k], d.offset[k], d.offset[k + 1], factor, v[k],
-                                      vp[k], projected[k], w);
+      for (std::size_t k = c * kChunk; k < end; ++k) {
+        if (d.offset[k] == d.offset[k + 1]) continue;
+        const T* from = records_.data() + record_at_[k];
+        auto get = [&] {
+          const Vec3<T> x{from[0], from[1], from[2]};
+          from += 3;
+          return x;
+        };
+        const Vec3<T> v = get(), vp = get(), projected = get();
+        for (std::int32_t q = d.offset[k]; q < d.offset[k + 1]; ++q)
+          if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
+            prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)] = get();
+        simulator::add_program_work(d, d.node[k], d.offset[k], d.offset[k + 1], factor, v, vp,
+                                    projected, w);
+      }
       partial[c] = w;
     }
     for (double p : partial) work += p;
@@ -478,28 +488,23 @@ double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
     // The weights' work, centred: g · (u(n+1) − u(n−1)) / 2, per node, summed per chunk of 1024
     // nodes in id order as the CPU engine sums it: every node's three terms from its owner.
     const Part& part = partition_.parts[std::size_t(rank_)];
-    std::vector<double> mine(3 * part.owned_nodes.size());
+    double* mine = gravity_terms_.data() + owned_displs_[std::size_t(rank_)];
     for (std::size_t k = 0; k < part.owned_nodes.size(); ++k) {
       const std::size_t i = std::size_t(part.owned_nodes[k]);
       for (int c = 0; c < 3; ++c)
         mine[3 * k + std::size_t(c)] =
             double(a_.gravity[i][c]) * 0.5 * (double(un_[i][c]) - double(up_[i][c]));
     }
-    std::vector<double> all(3 * n_), terms(3 * n_);
-    check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), MPI_DOUBLE, all.data(),
+    check_mpi(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, gravity_terms_.data(),
                              owned_counts_.data(), owned_displs_.data(), MPI_DOUBLE, comm_),
               "MPI_Allgatherv (gravity work)");
-    for (const auto& p : partition_.parts) {
-      const double* from = all.data() + owned_displs_[std::size_t(p.index)];
-      for (std::size_t k = 0; k < p.owned_nodes.size(); ++k)
-        for (std::size_t c = 0; c < 3; ++c)
-          terms[3 * std::size_t(p.owned_nodes[k]) + c] = from[3 * k + c];
-    }
     std::vector<double> partial(simulator::chunk_count(n_), 0.0);
     for (std::size_t c = 0; c < partial.size(); ++c) {
       double s = 0;
-      for (std::size_t i = c * kChunk; i < std::min(n_, (c + 1) * kChunk); ++i)
-        for (std::size_t k = 0; k < 3; ++k) s += terms[3 * i + k];
+      for (std::size_t i = c * kChunk; i < std::min(n_, (c + 1) * kChunk); ++i) {
+        const double* t = gravity_terms_.data() + gathered_at_[i];
+        for (std::size_t k = 0; k < 3; ++k) s += t[k];
+      }
       partial[c] = s;
     }
     for (double p : partial) work += p;
