@@ -203,10 +203,11 @@ TEST_P(PartitionedEngine, SlidingContractingForeheadUnderGravityGivesTheOneDevic
 }
 
 // Nodes that slide and carry a load or a prescribed displacement: the sliding forehead-like slab,
-// two bands of its skull nodes pushed into the skull and across it by nodal forces, two others
-// pulled along y by a prescribed displacement (bands on different parts for 2 and 3 ranks, and
-// next to their cuts). Their programs run force, capture, slide and prescribe on their owners, and
-// every kind of work term (forces, prescribed sets, projections, weights) enters the external work.
+// bands of its skull nodes pushed into the skull and across it by nodal forces, others pulled
+// along y by a prescribed displacement (node layers spread along x, the axis the slabs cut, so
+// that on 2 and 3 ranks they lie on several parts). Their programs run force, capture, slide and
+// prescribe on their owners, and every kind of work term (forces, prescribed sets, projections,
+// weights) enters the external work.
 TEST_P(PartitionedEngine, SlidingNodesWithLoadsAndPrescribedDisplacementsGiveTheOneDeviceBits) {
   const auto m = simulator::make_forehead_model(24, 12, 4, 0.5e-3);
   SimSetup s = forehead_setup(m, GetParam(), true);
