@@ -437,6 +437,9 @@ void PartitionedCpuEngine<T>::update_nodes(const std::vector<Index>& list, const
 
 template <typename T>
 double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
+  // The CPU engine sums both works inside for_each_chunk, in scalar T's floating-point mode (in
+  // float, denormals flushed: they would change a term's bits).
+  simulator::DenormalGuard<T> guard;
   const simulator::ConstraintData<T> d = constraint_data();
   double work = 0;
   if (d.count > 0) {
