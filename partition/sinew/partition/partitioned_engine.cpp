@@ -303,6 +303,7 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
   u_.assign(n_, Vec3<T>{T(0), T(0), T(0)});
   un_ = u_;
   {
+    simulator::DenormalGuard<T> guard;  // T's floating-point mode, as the CPU engine's chunks
     const auto d = constraint_data();
     core_.step_scalars(-1, scalars_.data());
     const T* factor = scalars_.data() + core_.muscle_count();
@@ -612,6 +613,7 @@ std::vector<Vec3<T>> PartitionedCpuEngine<T>::forces_now() {
   element_forces(boundary_elements_);
   element_forces(interior_elements_);
   const simulator::NodeData<T> d = a_.node_data(cd_);
+  simulator::DenormalGuard<T> guard;  // T's floating-point mode, as the CPU engine's gather
   for (Index i : partition_.parts[std::size_t(rank_)].owned_nodes)
     f_[std::size_t(i)] = simulator::node_internal_force(d, elem_force_.data(), i);
   return whole(f_);
