@@ -64,6 +64,16 @@ struct StepCheck {
   std::int64_t first_bad = INT_MAX;
 };
 
+// The scalars of constraint entry k's work record (constraint_work): u(n+1), u(n−1) and the
+// projections' moves, then u* of each of its prescribed sets.
+template <typename T>
+int record_size(const simulator::ConstraintArrays<T>& c, std::size_t k) {
+  int size = 9;
+  for (std::int32_t q = c.offset[k]; q < c.offset[k + 1]; ++q)
+    if ((c.op[std::size_t(q)] >> simulator::kOpShift) == simulator::kOpPrescribe) size += 3;
+  return size;
+}
+
 template <typename T>
 class PartitionedCpuEngine final : public simulator::Backend {
  public:
@@ -148,15 +158,16 @@ class PartitionedCpuEngine final : public simulator::Backend {
   void element_forces(const std::vector<std::vector<Index>>& lists);
   template <bool kElastic, bool kMuscle, bool kHourglass>
   void element_list(const std::vector<Index>& list);
-  // Gather, update, loads and constraints of the listed owned nodes into un_ (pre-constraint values
-  // of constrained nodes into ustar_); the lowest node whose update is not finite into `bad`.
+  // Gather, update, loads and constraints of the listed owned nodes into un_ (the projections'
+  // moves of constrained nodes into projected_); the lowest node whose update is not finite into
+  // `bad`.
   void update_nodes(const std::vector<Index>& list, const T* factor, Index& bad);
   simulator::ConstraintData<T> constraint_data() {
     return simulator::host_constraint_data(a_, cd_, prescribed_free_.data(), sliding_);
   }
-  // The external work over this step in the CPU engine's order: the loaded nodes' programs
-  // replayed on every rank from their gathered u* and u(n−1), then the weights' work from every
-  // node's terms, gathered.
+  // The external work over this step in the CPU engine's order: every constrained node's terms
+  // (add_program_work) on every rank from its owner's record, chunk by chunk of constrained
+  // nodes; then the weights' work from every node's terms, gathered.
   double constraint_work(const T* factor);
   // The step's checks merged over the ranks; `bad`: this rank's first non-finite node.
   StepCheck step_check(Index bad);
@@ -177,10 +188,14 @@ class PartitionedCpuEngine final : public simulator::Backend {
   std::vector<Index> boundary_nodes_, interior_nodes_;  // owned: sent to a neighbour, or not
   std::vector<double> jacobian_;                        // E, J of the computed elements
   std::vector<std::int32_t> entry_of_node_;             // N, constraint entry of a node or −1
-  // Constraint entries with nodal forces or prescribed displacements (the only ops adding work),
-  // per owner part.
-  std::vector<std::vector<std::int32_t>> work_entries_of_part_;
-  bool work_ops_ = false;
+  // The constraint entries per owner part (in entry order), and the scalars of their work records
+  // per part (constraint_work: u(n+1), u(n−1), the projections' moves, u* of each prescribed set).
+  std::vector<std::vector<std::int32_t>> entries_of_part_;
+  std::vector<int> record_counts_, record_displs_;
+  std::vector<std::size_t> record_at_;    // C, where entry k's record starts in records_
+  std::vector<T> records_;                // every entry's record, gathered by part
+  std::vector<std::size_t> gathered_at_;  // N, node i's first scalar in an owned-values gather
+  std::vector<double> gravity_terms_;     // every node's 3 weight work terms, gathered by part
   // Sliding: the CPU engine's state per binding, kept up to date by the binding's owner only; the
   // surfaces (read-only) on every rank.
   simulator::HostSlidingState<T> sliding_;
@@ -188,7 +203,8 @@ class PartitionedCpuEngine final : public simulator::Backend {
   std::vector<std::int32_t> bindings_by_owner_;       // binding ids, part by part
   std::vector<int> owned_counts_, owned_displs_;      // scalars per part (3 per owned node)
   std::vector<T> activation_, scalars_;
-  std::vector<Vec3<T>> elem_force_, f_, prescribed_free_, ustar_;
+  std::vector<Vec3<T>> elem_force_, f_, prescribed_free_;
+  std::vector<Vec3<T>> projected_;  // C, per constraint entry: its projections' moves this step
   std::vector<std::vector<T>> send_buf_, recv_buf_;
   std::vector<Vec3<T>> u_, up_, un_;
   std::int64_t step_ = 0;
@@ -239,27 +255,32 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
   }
   const auto& c = a_.constraints;
   entry_of_node_.assign(n_, -1);
-  work_entries_of_part_.resize(std::size_t(size_));
+  entries_of_part_.resize(std::size_t(size_));
+  record_counts_.assign(std::size_t(size_), 0);
   for (std::size_t k = 0; k < c.node.size(); ++k) {
     entry_of_node_[std::size_t(c.node[k])] = std::int32_t(k);
-    bool work = false, slide = false;
-    for (std::int32_t q = c.offset[k]; q < c.offset[k + 1]; ++q) {
-      const std::int32_t kind = c.op[std::size_t(q)] >> simulator::kOpShift;
-      work = work || kind == simulator::kOpForce || kind == simulator::kOpPrescribe;
-      slide = slide || kind == simulator::kOpSlide;
-    }
-    // The work replay runs the program of loaded nodes on every rank, and a sliding node's lists
-    // live on its owner only.
-    if (work && slide)
-      throw ConfigError("", "forces",
-                        fmt::format("node {} slides and carries a load or prescribed "
-                                    "displacement: not yet supported by the partitioned engine",
-                                    c.node[k]));
-    if (work)
-      work_entries_of_part_[std::size_t(partition_.node_owner[std::size_t(c.node[k])])].push_back(
-          std::int32_t(k));
-    work_ops_ = work_ops_ || work;
+    const int p = partition_.node_owner[std::size_t(c.node[k])];
+    entries_of_part_[std::size_t(p)].push_back(std::int32_t(k));
+    record_counts_[std::size_t(p)] += record_size(c, k);
   }
+  record_at_.resize(c.node.size());
+  for (int p = 0; p < size_; ++p) {
+    record_displs_.push_back(p == 0 ? 0
+                                    : record_displs_.back() + record_counts_[std::size_t(p - 1)]);
+    std::size_t at = std::size_t(record_displs_.back());
+    for (std::int32_t k : entries_of_part_[std::size_t(p)]) {
+      record_at_[std::size_t(k)] = at;
+      at += std::size_t(record_size(c, std::size_t(k)));
+    }
+  }
+  records_.resize(std::size_t(record_displs_.back() + record_counts_.back()));
+  projected_.assign(c.node.size(), Vec3<T>{T(0), T(0), T(0)});
+  gathered_at_.resize(n_);
+  for (const auto& p : partition_.parts)
+    for (std::size_t k = 0; k < p.owned_nodes.size(); ++k)
+      gathered_at_[std::size_t(p.owned_nodes[k])] =
+          std::size_t(owned_displs_[std::size_t(p.index)]) + 3 * k;
+  if (setup.effects.gravity) gravity_terms_.resize(3 * n_);
   sliding_ = simulator::HostSlidingState<T>(a_);
   const std::size_t slides = a_.slide_node.size();
   for (int p = 0; p < size_; ++p) {
@@ -273,7 +294,6 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
   jacobian_.assign(model.element_count(), 0.0);
   elem_force_.assign(a_.elements * 8, Vec3<T>{T(0), T(0), T(0)});
   f_.assign(n_, Vec3<T>{T(0), T(0), T(0)});
-  ustar_ = f_;
   activation_.assign(core_.muscle_count(), T(0));
   scalars_.assign(core_.step_scalar_count(), T(0));
   prescribed_free_.resize(c.prescribed_set.size());
@@ -283,6 +303,7 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
   u_.assign(n_, Vec3<T>{T(0), T(0), T(0)});
   un_ = u_;
   {
+    simulator::DenormalGuard<T> guard;  // T's floating-point mode, as the CPU engine's chunks
     const auto d = constraint_data();
     core_.step_scalars(-1, scalars_.data());
     const T* factor = scalars_.data() + core_.muscle_count();
@@ -400,11 +421,12 @@ void PartitionedCpuEngine<T>::update_nodes(const std::vector<Index>& list, const
                 if (!simulator::all_finite(v)) first_bad[c] = std::min(first_bad[c], Index(i));
                 const std::int32_t entry = entry_of_node_[ii];
                 if (entry >= 0) {
-                  ustar_[ii] = v;
-                  double w = 0;  // the work is constraint_work's
-                  v = simulator::run_program<T, kSlide>(cdata, i, cdata.offset[entry],
-                                                        cdata.offset[entry + 1], factor, true, v,
-                                                        up_.data(), false, w);
+                  // Its work is added by constraint_work, on every rank in the one-device order.
+                  Vec3<T>& projected = projected_[std::size_t(entry)];
+                  projected = Vec3<T>{T(0), T(0), T(0)};
+                  v = simulator::run_ops<T, kSlide>(cdata, i, cdata.offset[entry],
+                                                    cdata.offset[entry + 1], factor, true, v,
+                                                    projected);
                 }
                 un_[ii] = v;
               }
@@ -416,46 +438,52 @@ void PartitionedCpuEngine<T>::update_nodes(const std::vector<Index>& list, const
 
 template <typename T>
 double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
+  // The CPU engine sums both works inside for_each_chunk, in scalar T's floating-point mode (in
+  // float, denormals flushed: they would change a term's bits).
+  simulator::DenormalGuard<T> guard;
   const simulator::ConstraintData<T> d = constraint_data();
   double work = 0;
-  if (work_ops_) {
-    // (u*, u(n−1)) of every loaded entry, from its owner.
-    std::vector<int> counts, displs;
-    for (const auto& e : work_entries_of_part_) {
-      displs.push_back(counts.empty() ? 0 : displs.back() + counts.back());
-      counts.push_back(int(6 * e.size()));
-    }
-    std::vector<T> mine;
-    for (std::int32_t k : work_entries_of_part_[std::size_t(rank_)]) {
+  if (d.count > 0) {
+    // Every entry's record from its owner (what add_program_work reads of it), this rank's written
+    // in place into the gathered buffer.
+    for (std::int32_t k : entries_of_part_[std::size_t(rank_)]) {
+      T* to = records_.data() + record_at_[std::size_t(k)];
+      auto put = [&](const Vec3<T>& x) {
+        for (int c = 0; c < 3; ++c) *to++ = x[c];
+      };
       const std::size_t i = std::size_t(d.node[k]);
-      for (int c = 0; c < 3; ++c) mine.push_back(ustar_[i][c]);
-      for (int c = 0; c < 3; ++c) mine.push_back(up_[i][c]);
+      put(un_[i]);
+      put(up_[i]);
+      put(projected_[std::size_t(k)]);
+      for (std::int32_t q = d.offset[k]; q < d.offset[k + 1]; ++q)
+        if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
+          put(prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)]);
     }
-    std::vector<T> all(std::size_t(displs.back() + counts.back()));
-    check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), mpi_scalar<T>(), all.data(),
-                             counts.data(), displs.data(), mpi_scalar<T>(), comm_),
-              "MPI_Allgatherv (loaded nodes)");
-    std::vector<Vec3<T>> vstar(std::size_t(d.count));
-    std::vector<char> loaded(std::size_t(d.count), 0);
-    for (std::size_t p = 0; p < work_entries_of_part_.size(); ++p) {
-      const T* from = all.data() + displs[p];
-      for (std::size_t j = 0; j < work_entries_of_part_[p].size(); ++j) {
-        const std::size_t k = std::size_t(work_entries_of_part_[p][j]);
-        vstar[k] = {from[6 * j], from[6 * j + 1], from[6 * j + 2]};
-        // u(n−1) of a loaded node is now its owner's (its true value, on every rank).
-        up_[std::size_t(d.node[k])] = {from[6 * j + 3], from[6 * j + 4], from[6 * j + 5]};
-        loaded[k] = 1;
-      }
-    }
-    // The CPU engine's apply_constraints, chunk by chunk; the other entries add nothing.
+    check_mpi(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, records_.data(),
+                             record_counts_.data(), record_displs_.data(), mpi_scalar<T>(), comm_),
+              "MPI_Allgatherv (constraint work)");
+    // The CPU engine's apply_constraints sums: term by term within a chunk of 1024 entries, then
+    // the chunks in order. u* of a prescribed set goes into prescribed_free_ (the owner's value;
+    // this rank's own entries get theirs back), where add_program_work reads it.
     std::vector<double> partial(simulator::chunk_count(std::size_t(d.count)), 0.0);
     for (std::size_t c = 0; c < partial.size(); ++c) {
       double w = 0;
       const std::size_t end = std::min(std::size_t(d.count), (c + 1) * kChunk);
-      for (std::size_t k = c * kChunk; k < end; ++k)
-        if (loaded[k])
-          simulator::run_program<T, 0>(d, d.node[k], d.offset[k], d.offset[k + 1], factor, true,
-                                       vstar[k], up_.data(), true, w);
+      for (std::size_t k = c * kChunk; k < end; ++k) {
+        if (d.offset[k] == d.offset[k + 1]) continue;
+        const T* from = records_.data() + record_at_[k];
+        auto get = [&] {
+          const Vec3<T> x{from[0], from[1], from[2]};
+          from += 3;
+          return x;
+        };
+        const Vec3<T> v = get(), vp = get(), projected = get();
+        for (std::int32_t q = d.offset[k]; q < d.offset[k + 1]; ++q)
+          if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
+            prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)] = get();
+        simulator::add_program_work(d, d.node[k], d.offset[k], d.offset[k + 1], factor, v, vp,
+                                    projected, w);
+      }
       partial[c] = w;
     }
     for (double p : partial) work += p;
@@ -464,28 +492,23 @@ double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
     // The weights' work, centred: g · (u(n+1) − u(n−1)) / 2, per node, summed per chunk of 1024
     // nodes in id order as the CPU engine sums it: every node's three terms from its owner.
     const Part& part = partition_.parts[std::size_t(rank_)];
-    std::vector<double> mine(3 * part.owned_nodes.size());
+    double* mine = gravity_terms_.data() + owned_displs_[std::size_t(rank_)];
     for (std::size_t k = 0; k < part.owned_nodes.size(); ++k) {
       const std::size_t i = std::size_t(part.owned_nodes[k]);
       for (int c = 0; c < 3; ++c)
         mine[3 * k + std::size_t(c)] =
             double(a_.gravity[i][c]) * 0.5 * (double(un_[i][c]) - double(up_[i][c]));
     }
-    std::vector<double> all(3 * n_), terms(3 * n_);
-    check_mpi(MPI_Allgatherv(mine.data(), int(mine.size()), MPI_DOUBLE, all.data(),
+    check_mpi(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, gravity_terms_.data(),
                              owned_counts_.data(), owned_displs_.data(), MPI_DOUBLE, comm_),
               "MPI_Allgatherv (gravity work)");
-    for (const auto& p : partition_.parts) {
-      const double* from = all.data() + owned_displs_[std::size_t(p.index)];
-      for (std::size_t k = 0; k < p.owned_nodes.size(); ++k)
-        for (std::size_t c = 0; c < 3; ++c)
-          terms[3 * std::size_t(p.owned_nodes[k]) + c] = from[3 * k + c];
-    }
     std::vector<double> partial(simulator::chunk_count(n_), 0.0);
     for (std::size_t c = 0; c < partial.size(); ++c) {
       double s = 0;
-      for (std::size_t i = c * kChunk; i < std::min(n_, (c + 1) * kChunk); ++i)
-        for (std::size_t k = 0; k < 3; ++k) s += terms[3 * i + k];
+      for (std::size_t i = c * kChunk; i < std::min(n_, (c + 1) * kChunk); ++i) {
+        const double* t = gravity_terms_.data() + gathered_at_[i];
+        for (std::size_t k = 0; k < 3; ++k) s += t[k];
+      }
       partial[c] = s;
     }
     for (double p : partial) work += p;
@@ -590,6 +613,7 @@ std::vector<Vec3<T>> PartitionedCpuEngine<T>::forces_now() {
   element_forces(boundary_elements_);
   element_forces(interior_elements_);
   const simulator::NodeData<T> d = a_.node_data(cd_);
+  simulator::DenormalGuard<T> guard;  // T's floating-point mode, as the CPU engine's gather
   for (Index i : partition_.parts[std::size_t(rank_)].owned_nodes)
     f_[std::size_t(i)] = simulator::node_internal_force(d, elem_force_.data(), i);
   return whole(f_);

@@ -13,16 +13,17 @@
 // Checks and sums that one device makes over all items are made here in the one-device order, so
 // they are the same bits: the smallest J (every step: each rank's primary elements, the ranks'
 // results merged in collection order) and the first non-finite node (every step, gathered with
-// the J results); the external work (the loaded nodes' programs replayed on every rank from their
-// gathered u* and u(n−1); the weights' work from every node's terms, gathered); at energy steps
+// the J results); the external work (every constrained node's work terms, add_program_work, on
+// every rank from its owner's u(n+1), u(n−1), projections' moves and u*, in the one-device chunk
+// order; the weights' work from every node's terms, gathered); at energy steps
 // the kinetic, strain and hourglass energies (u and u(n−1) gathered whole; the one-device chunks
 // of 1024 elements dealt to the ranks, their sums gathered and added in order).
 //
 // Every Backend method is collective: all ranks call the same methods in the same order, and each
 // gets the whole result (displacements, energies, state, fields). A checkpoint holds the whole
 // state, so it restarts on any number of ranks.
-// Sliding nodes belong to the part owning them (their lists and warm starts live there); the
-// surfaces are on every rank. Not yet: a node that both slides and carries a load (ConfigError).
+// Sliding nodes belong to the part owning them (their lists and warm starts live there; a sliding
+// node may carry loads and prescribed displacements too); the surfaces are on every rank.
 #include <memory>
 
 #include <mpi.h>
@@ -34,7 +35,7 @@
 namespace sinew::partition {
 
 // The partitioned CPU backend on `comm` (one part per rank, make_partition with work_of). Collective.
-// Throws ConfigError for a bad Setup (as make_cpu_backend) or a sliding node with a load.
+// Throws ConfigError for a bad Setup (as make_cpu_backend).
 std::unique_ptr<simulator::Backend> make_partitioned_cpu_backend(const formats::Model& model,
                                                                  const simulator::Setup& setup,
                                                                  MPI_Comm comm);

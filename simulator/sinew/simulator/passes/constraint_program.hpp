@@ -47,25 +47,18 @@ struct ConstraintData {
   std::int32_t force_sets;
 };
 
-// Runs ops [begin, end) of node i on v (its u(n+1) after the update) and, with `work`, adds the
-// work of its nodal forces and constraint forces, Σ R · (u(n+1) − u(n−1))/2, to w. A constraint
-// moves the node from where the forces put it; its force is that move over A = Δt²/m (central
-// differences): R = (u − u*)/A for a prescribed set (u* captured before the node's constraints, so
-// this also counts the projections of a node that is prescribed too), and for a node with no
-// prescribed set R = Σ (v after − v before)/A over its sliding and plane projections (zero work on
-// a fixed surface in exact arithmetic; nonzero when the projection stops a node thrown at the
-// surface, or works on round-off noise in float: docs/physics.md, "Instability"). Rigid nodes do
-// not move: no work. factor: [force factors at t_n | prescribed factors at t_n+1].
-// With `loads` off (the initial constraints at t = 0) nodal forces and captures are skipped.
+// Runs ops [begin, end) of node i on v (its u(n+1) after the update) and returns the result;
+// `projected` (zero on entry) gets the sum of the sliding and plane projections' moves, for
+// add_program_work. factor: [force factors at t_n | prescribed factors at t_n+1]. With `loads` off
+// (the initial constraints at t = 0) nodal forces and captures are skipped.
 // kSlide: 0 the model has no sliding (the op is compiled out); 1 sliding with the list refresh
 // (and grid search) inline; 2 sliding with lists refreshed ahead by slide_refresh_kernel.
 // `start`: slide_start of sliding entry `started` when loaded ahead (−1: none).
 template <typename T, int kSlide>
-SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, std::int32_t begin,
-                                    std::int32_t end, const T* factor, bool loads, Vec3<T> v,
-                                    const Vec3<T>* up, bool work, double& w,
-                                    const SlideStart<T>& start = {}, std::int32_t started = -1) {
-  Vec3<T> projected{T(0), T(0), T(0)};  // the moves of the sliding and plane projections
+SINEW_HD_INLINE Vec3<T> run_ops(const ConstraintData<T>& d, std::int32_t i, std::int32_t begin,
+                                std::int32_t end, const T* factor, bool loads, Vec3<T> v,
+                                Vec3<T>& projected, const SlideStart<T>& start = {},
+                                std::int32_t started = -1) {
   for (std::int32_t q = begin; q < end; ++q) {
     const std::int32_t code = d.op[q], arg = code & kOpArg;
     const Vec3<T> before = v;
@@ -102,30 +95,57 @@ SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, 
         v = Vec3<T>{T(0), T(0), T(0)};
     }
   }
-  if (work && begin < end) {
-    const Vec3<T> vp = up[i];
-    const double a = double(d.cd.a_over_inverse_mass) * double(d.inverse_mass[i]);
-    bool prescribed = false;
-    for (std::int32_t q = begin; q < end; ++q) {
-      const std::int32_t code = d.op[q], arg = code & kOpArg, kind = code >> kOpShift;
-      if (kind == kOpForce) {
-        if (factor[arg] == T(0)) continue;
-        const double f = double(factor[arg]);
-        for (int k = 0; k < 3; ++k)
-          w += f * double(d.force_per_node[arg][k]) * 0.5 * (double(v[k]) - double(vp[k]));
-      } else if (kind == kOpPrescribe) {
-        prescribed = true;
-        for (int k = 0; k < 3; ++k) {
-          const double fc = (double(v[k]) - double(d.prescribed_free[arg][k])) / a;
-          w += fc * 0.5 * (double(v[k]) - double(vp[k]));
-        }
+  return v;
+}
+
+// Adds to w the work over the step of node i's nodal forces and constraint forces (ops [begin,
+// end), begin < end), Σ R · (u(n+1) − u(n−1))/2, term by term: v = u(n+1) after run_ops, vp =
+// u(n−1), `projected` and d.prescribed_free as run_ops left them. A constraint moves the node
+// from where the forces put it; its force is that move over A = Δt²/m (central differences):
+// R = (u − u*)/A for a prescribed set (u* captured before the node's constraints, so this also
+// counts the projections of a node that is prescribed too), and for a node with no prescribed set
+// R = Σ (v after − v before)/A over its sliding and plane projections (zero work on a fixed
+// surface in exact arithmetic; nonzero when the projection stops a node thrown at the surface, or
+// works on round-off noise in float: docs/physics.md, "Instability"). Rigid nodes do not move: no
+// work. Separate from run_ops so that an engine can add the terms where the node is not run (the
+// partitioned engine adds every node's terms on every rank in the one-device chunk order).
+template <typename T>
+SINEW_HD_INLINE void add_program_work(const ConstraintData<T>& d, std::int32_t i,
+                                      std::int32_t begin, std::int32_t end, const T* factor,
+                                      const Vec3<T>& v, const Vec3<T>& vp, const Vec3<T>& projected,
+                                      double& w) {
+  const double a = double(d.cd.a_over_inverse_mass) * double(d.inverse_mass[i]);
+  bool prescribed = false;
+  for (std::int32_t q = begin; q < end; ++q) {
+    const std::int32_t code = d.op[q], arg = code & kOpArg, kind = code >> kOpShift;
+    if (kind == kOpForce) {
+      if (factor[arg] == T(0)) continue;
+      const double f = double(factor[arg]);
+      for (int k = 0; k < 3; ++k)
+        w += f * double(d.force_per_node[arg][k]) * 0.5 * (double(v[k]) - double(vp[k]));
+    } else if (kind == kOpPrescribe) {
+      prescribed = true;
+      for (int k = 0; k < 3; ++k) {
+        const double fc = (double(v[k]) - double(d.prescribed_free[arg][k])) / a;
+        w += fc * 0.5 * (double(v[k]) - double(vp[k]));
       }
     }
-    if (!prescribed) {
-      for (int k = 0; k < 3; ++k)
-        w += double(projected[k]) / a * 0.5 * (double(v[k]) - double(vp[k]));
-    }
   }
+  if (!prescribed) {
+    for (int k = 0; k < 3; ++k)
+      w += double(projected[k]) / a * 0.5 * (double(v[k]) - double(vp[k]));
+  }
+}
+
+// run_ops on node i, then, with `work`, add_program_work into w (u(n−1) from up).
+template <typename T, int kSlide>
+SINEW_HD_INLINE Vec3<T> run_program(const ConstraintData<T>& d, std::int32_t i, std::int32_t begin,
+                                    std::int32_t end, const T* factor, bool loads, Vec3<T> v,
+                                    const Vec3<T>* up, bool work, double& w,
+                                    const SlideStart<T>& start = {}, std::int32_t started = -1) {
+  Vec3<T> projected{T(0), T(0), T(0)};  // the moves of the sliding and plane projections
+  v = run_ops<T, kSlide>(d, i, begin, end, factor, loads, v, projected, start, started);
+  if (work && begin < end) add_program_work(d, i, begin, end, factor, v, up[i], projected, w);
   return v;
 }
 
