@@ -327,6 +327,45 @@ TEST(CudaBackend, InstabilityIsDetectedWithTheStateAtTheLastGoodStep) {
   EXPECT_EQ(cut->step_index(), gpu->step_index());
 }
 
+// The blow-up test runs where each step's row flags it (steps ≡ 0 mod the energy interval), so
+// graphs start at any step ≡ 0 mod 3: with intervals that are not multiples of 3 (7, 10) and one
+// that is (3), long calls and calls of 73 steps (single launches and short graphs) stop at the
+// step the CPU stops at, with one message.
+TEST(CudaBackend, BlowUpTestsFollowTheEnergyIntervalAsOnTheCpu) {
+  SKIP_WITHOUT_GPU();
+  const auto model = block(8, 8, 8, 1e-3, neo_hookean(1000, 0.49, 1000));
+  for (int interval : {7, 10, 3}) {
+    SCOPED_TRACE(interval);
+    SimSetup s;
+    s.precision = Precision::float64;
+    s.duration = 1;
+    s.energy_interval = interval;
+    const Plan probe = make_plan(model, s);
+    s.time_step.policy = TimeStepPolicy::forced;
+    s.time_step.user_dt = 1.3 * probe.dt_critical;
+    s.initial_velocities.push_back({nodes_at(model, 2, 8), {0, 0, 0.05}});
+    auto stop = [](Backend& b, std::int64_t call) {
+      try {
+        for (int k = 0; k < 20000 / call + 1; ++k) b.step(call);
+      } catch (const InstabilityError& e) {
+        return std::string(e.what());
+      }
+      return std::string();
+    };
+    auto cpu = make_cpu_backend(model, s);
+    ASSERT_FALSE(stop(*cpu, 20000).empty()) << "no instability on the CPU";
+    std::string first;
+    for (std::int64_t call : {std::int64_t(20000), std::int64_t(73)}) {
+      auto gpu = make_cuda_backend(model, s);
+      const std::string message = stop(*gpu, call);
+      ASSERT_FALSE(message.empty()) << "calls of " << call;
+      if (first.empty()) first = message;
+      EXPECT_EQ(message, first) << "calls of " << call;
+      EXPECT_EQ(gpu->step_index(), cpu->step_index()) << "calls of " << call << ": " << message;
+    }
+  }
+}
+
 // The same with muscles and sliding (the accuracy study's forehead at 0.9 h/c once ended in an
 // illegal memory access instead): a diverging run with sliding nodes must stop with the
 // instability message, whatever the precision, and keep the last good state.

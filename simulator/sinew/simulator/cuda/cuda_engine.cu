@@ -21,15 +21,9 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   n_ = a.nodes;
   e_ = a.elements;
   interval_ = std::max(1, setup.energy_interval);
-  {
-    // Graph batches start at steps ≡ 0 mod lcm(3, interval) so the blow-up tests sit at fixed
-    // slots of the captured graph; a very long interval falls back to a test at each sync point.
-    const std::int64_t lcm = std::lcm<std::int64_t>(3, interval_);
-    graph_blowup_ = lcm <= 1024;
-    align_ = graph_blowup_ ? lcm : 3;
-    const std::int64_t want = std::max<std::int64_t>(options.graph_steps, align_);
-    batch_ = int((want + align_ - 1) / align_ * align_);
-  }
+  // Graph batches start at steps ≡ 0 mod 3 (the buffers' rotation); their blow-up tests follow
+  // each step's row flag, so they need no alignment to the energy interval.
+  batch_ = int((std::max(options.graph_steps, 3) + 2) / 3 * 3);
   const Effects& fx = setup.effects;
   cd_ = physics::central_difference<T>(dt(), fx.damping ? setup.damping_alpha : 0.0);
 
@@ -180,7 +174,8 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   counters_.zero();
   bound_.upload({BlowupBound{0, 0}});
 
-  scalars_per_slot_ = core_.step_scalar_count();
+  energy_flag_ = core_.step_scalar_count();
+  scalars_per_slot_ = energy_flag_ + 1;
   scalars_.allocate(scalars_per_slot_ * std::size_t(batch_ + 1));
   ring_rows_ = std::size_t(kQueuedBatches + 1) * std::size_t(batch_ + 1);
   scalars_host_.allocate(scalars_per_slot_ * ring_rows_);
@@ -241,7 +236,11 @@ void CudaEngine<T>::fill_scalars(std::int64_t first_step, int count, int slot0) 
   T* h = scalars_host_.get() + scalars_per_slot_ * ring_next_;
   ring_next_ += std::size_t(count);
   for (int k = 0; k < count; ++k)
-    core_.step_scalars(first_step + k, h + scalars_per_slot_ * std::size_t(k));
+  {
+    T* row = h + scalars_per_slot_ * std::size_t(k);
+    core_.step_scalars(first_step + k, row);
+    row[energy_flag_] = T((first_step + k) >= 0 && (first_step + k) % interval_ == 0 ? 1 : 0);
+  }
   SINEW_CUDA_CHECK(cudaMemcpyAsync(scalars_.get() + scalars_per_slot_ * std::size_t(slot0), h,
                                    scalars_per_slot_ * std::size_t(count) * sizeof(T),
                                    cudaMemcpyHostToDevice, stream_));

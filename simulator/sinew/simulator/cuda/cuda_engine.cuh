@@ -94,10 +94,11 @@ class CudaEngine final : public Backend, public CudaTiming {
   void fill_scalars(std::int64_t first_step, int count, int slot0);
   void launch_elements(const Vec3<T>* u, const T* activation, int mode, cudaStream_t s,
                        bool programmatic = false);
-  void launch_nodes(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc, bool blowup_test,
-                    cudaStream_t s, bool programmatic = false);
-  void launch_tiles(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc, bool blowup_test,
-                    cudaStream_t s, bool programmatic = false);
+  // energy_flag: the step's row flag of the blow-up test (null: no test in this launch).
+  void launch_nodes(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc,
+                    const T* energy_flag, cudaStream_t s, bool programmatic = false);
+  void launch_tiles(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc,
+                    const T* energy_flag, cudaStream_t s, bool programmatic = false);
   // ahead: the lists were refreshed from u(n) by slide_refresh_kernel (launch_step).
   // programmatic: a programmatic dependent launch (launch_kernel), as for the launches below.
   // lists_ready: no list refresh was forked for this step (constraint_kernel).
@@ -108,9 +109,10 @@ class CudaEngine final : public Backend, public CudaTiming {
   void launch_refresh(const Vec3<T>* u, cudaStream_t s);
   // ahead: sliding lists refreshed ahead on slide_stream_ (graph steps, stage timing); direct
   // steps refresh inline and never miss. programmatic: the kernels that follow a kernel in s are
-  // programmatic dependent launches (graph steps with programmatic_).
+  // programmatic dependent launches (graph steps with programmatic_). energy_tests: the kinetic
+  // energy blow-up test runs where the slot's row flags it (steps ≡ 0 mod the energy interval).
   void launch_step(std::int64_t step, int slot, cudaStream_t s, bool ahead_slide,
-                   bool blowup_test = false,
+                   bool energy_tests = false,
                    std::vector<std::pair<std::string, cudaEvent_t>>* marks = nullptr,
                    bool programmatic = false);
   std::vector<std::pair<std::string, float>> stage_times(int repeats) override;
@@ -118,15 +120,24 @@ class CudaEngine final : public Backend, public CudaTiming {
   cudaGraphExec_t capture_steps(int count, bool ahead);
   void build_graph();
   void destroy_graphs() {
-    for (cudaGraphExec_t* g : {&graph_, &short_graph_, &inline_graph_, &inline_short_graph_})
-      if (*g) {
-        cudaGraphExecDestroy(*g);
-        *g = nullptr;
-      }
+    for (GraphSet* set : {&graphs_, &inline_graphs_}) {
+      for (cudaGraphExec_t g : set->shorter)
+        if (g) cudaGraphExecDestroy(g);
+      set->shorter.clear();
+      if (set->batch) cudaGraphExecDestroy(set->batch);
+      set->batch = nullptr;
+    }
   }
-  // Queues steps from step_ to chunk_end: these graphs at aligned steps, single launches between;
-  // true when a graph ran. read_status: the status flags after the queued work (syncs).
-  bool queue_steps(std::int64_t chunk_end, cudaGraphExec_t graph, cudaGraphExec_t short_graph);
+  // Graphs of batch_ steps and of 3 · 2^j < batch_ steps (the aligned stretches shorter than a
+  // batch between a run's outputs: 72 steps are 48 + 24).
+  struct GraphSet {
+    cudaGraphExec_t batch = nullptr;
+    std::vector<cudaGraphExec_t> shorter;  // 3 · 2^j steps
+  };
+  GraphSet capture_graph_set(bool ahead);
+  // Queues steps from step_ to chunk_end: these graphs at steps ≡ 0 mod 3, single launches before
+  // and after; true when a graph ran. read_status: the status flags after the queued work (syncs).
+  bool queue_steps(std::int64_t chunk_end, const GraphSet& graphs);
   StepStatus read_status();
   // After a force slot changed in the core: the program uploaded again (all of it when the slot's
   // nodes changed, then the graphs recaptured; else only the per-set forces, in place).
@@ -181,11 +192,10 @@ class CudaEngine final : public Backend, public CudaTiming {
   int sm_count_ = 132;
   // Graph steps as programmatic dependent launches (options.programmatic_launch on sm_90+).
   bool programmatic_ = false;
-  cudaGraphExec_t graph_ = nullptr;        // batch_ steps
-  cudaGraphExec_t short_graph_ = nullptr;  // align_ steps (null when align_ = batch_)
+  GraphSet graphs_;
   // The same with the sliding lists refreshed inline, for replaying a chunk with a list miss;
   // captured at the first miss (recaptured after build_graph).
-  cudaGraphExec_t inline_graph_ = nullptr, inline_short_graph_ = nullptr;
+  GraphSet inline_graphs_;
 
   // elements
   DeviceArray<std::array<Index, 8>> elem_nodes_;
@@ -209,7 +219,8 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<Vec3<T>> snap_u_, snap_up_;
   DeviceArray<double> element_energy_;
   DeviceArray<double> energy_chunk_sum_;  // 2 per chunk of each collection (energies)
-  // per-step scalars: per slot [activation (M) | force factors (F) | prescribed factors (P)];
+  // per-step scalars: per slot [activation (M) | force factors (F) | prescribed factors (P) |
+  // energy test flag (1)];
   // device slots 0 .. batch_ − 1 for the graph, slot batch_ for a single launched step; staged on
   // the host in a pinned ring of ring_rows_ rows (fill_scalars).
   std::size_t scalars_per_slot_ = 0;
@@ -257,10 +268,11 @@ class CudaEngine final : public Backend, public CudaTiming {
             bound_.get(),
             1.0 / core_.dt()};
   }
-  // kinetic-energy blow-up test inside graphs (at steps ≡ 0 mod energy_interval)
+  // The kinetic-energy blow-up test on the device, at steps ≡ 0 mod energy_interval: each step's
+  // row of scalars ends with its flag (energy_flag_: 1 or 0), so a graph may start at any step
+  // ≡ 0 mod 3 (the three u buffers' rotation).
   int interval_ = 10;
-  std::int64_t align_ = 3;  // graphs start at steps ≡ 0 mod align_ (3, or lcm(3, interval))
-  bool graph_blowup_ = false;
+  std::size_t energy_flag_ = 0;  // index of the flag in a row
   DeviceArray<double> ke_partial_, work_partial_;
   DeviceArray<unsigned> counters_;
   DeviceArray<BlowupBound> bound_;

@@ -90,7 +90,7 @@ void CudaEngine<T>::launch_elements(const Vec3<T>* u, const T* activation, int m
 
 template <typename T>
 void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, bool ahead_slide,
-                                bool blowup_test,
+                                bool energy_tests,
                                 std::vector<std::pair<std::string, cudaEvent_t>>* marks,
                                 bool programmatic) {
   const Vec3<T>* u = buffer(step, 0);
@@ -110,6 +110,7 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
   // keeps its list while within s of its anchor (else a miss and a replay).
   const bool refresh = ahead && step % refresh_interval_ == 0;
   const T* sc = scalars_.get() + scalars_per_slot_ * std::size_t(slot);
+  const T* energy_flag = energy_tests ? sc + energy_flag_ : nullptr;
   if (refresh) {  // fork: the lists for this step, from u(n), beside the element and node kernels
     SINEW_CUDA_CHECK(cudaEventRecord(slide_fork_, s));
     SINEW_CUDA_CHECK(cudaStreamWaitEvent(slide_stream_, slide_fork_, 0));
@@ -122,7 +123,7 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
   // 0.0553 → 0.0732 with every step).
   const bool first_programmatic = programmatic && !refresh;
   if (options_.assembly == ForceAssembly::tiled) {
-    launch_tiles(u, up, un, sc, blowup_test, s, first_programmatic);
+    launch_tiles(u, up, un, sc, energy_flag, s, first_programmatic);
     mark(program_in_node_ ? "elements + nodes in tiles (+ loads, constraints, work, KE test)"
                           : "elements + nodes in tiles (+ KE test)");
   } else {
@@ -130,7 +131,7 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
                     first_programmatic);
     mark("elements: F, S (+ muscles), forces, hourglass");
     // After element collections joined from side streams (events): a plain launch.
-    launch_nodes(u, up, un, sc, blowup_test, s, programmatic && collections_.size() == 1);
+    launch_nodes(u, up, un, sc, energy_flag, s, programmatic && collections_.size() == 1);
     mark(program_in_node_ ? "nodes: force gather + update + loads, constraints, work (+ KE test)"
                           : "nodes: force gather + central-difference update (+ KE test)");
   }
@@ -144,7 +145,7 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
 // The node kernel after the element kernels (gather or atomic assembly).
 template <typename T>
 void CudaEngine<T>::launch_nodes(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc,
-                                 bool blowup_test, cudaStream_t s, bool programmatic) {
+                                 const T* energy_flag, cudaStream_t s, bool programmatic) {
   const bool gather = options_.assembly == ForceAssembly::gather;
   NodeData<T> nd{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
                  std::int32_t(n_)};
@@ -153,7 +154,7 @@ void CudaEngine<T>::launch_nodes(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* u
   auto node = [&](auto kernel) {
     launch_kernel(kernel, blocks_for(n_), kBlock, 0, s, programmatic, nd, elem_force_.get(),
                   f_sum_.get(), u, up, un, status_.get(), sums, program, node_op_offset_.get(),
-                  sc + muscles_);
+                  sc + muscles_, energy_flag);
   };
   const bool grav = core_.setup().effects.gravity, prog = program_in_node_;
   // Every combination is its own specialised kernel.
@@ -162,13 +163,13 @@ void CudaEngine<T>::launch_nodes(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* u
         node(node_kernel<T, decltype(gathered)::value, decltype(gravity)::value,
                          decltype(energy_test)::value, decltype(program)::value>);
       },
-      gather, grav, blowup_test, prog);
+      gather, grav, energy_flag != nullptr, prog);
   SINEW_CUDA_LAUNCHED();
 }
 
 template <typename T>
 void CudaEngine<T>::launch_tiles(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* un, const T* sc,
-                                 bool blowup_test, cudaStream_t s, bool programmatic) {
+                                 const T* energy_flag, cudaStream_t s, bool programmatic) {
   ElementData<T> ed{elem_nodes_.get(),    row_.get(),           rows_.get(),
                     muscle_offset_.get(), muscle_id_.get(),     muscle_fraction_.get(),
                     muscle_fibre_.get(),  muscle_params_.get(), h_,
@@ -183,7 +184,7 @@ void CudaEngine<T>::launch_tiles(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* u
     SINEW_CUDA_CHECK(
         cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, int(bytes)));
     launch_kernel(kernel, g, kBlock, bytes, s, programmatic, tile_data_, ed, nd, u, sc, up, un,
-                  status_.get(), sums, program, node_op_offset_.get(), sc + muscles_, blowup_test);
+                  status_.get(), sums, program, node_op_offset_.get(), sc + muscles_, energy_flag);
   };
   const Effects& fx = core_.setup().effects;
   const bool el = fx.elasticity, mu = fx.muscles, hg = fx.hourglass, gr = fx.gravity;
@@ -232,8 +233,8 @@ std::vector<std::pair<std::string, float>> CudaEngine<T>::stage_times(int repeat
   return out;
 }
 
-// The graph of a batch of `count` steps starting at a step ≡ 0 (mod align_), a multiple of 3 and
-// of the energy interval: its scalars in slots 0 .. count − 1.
+// The graph of a batch of `count` steps starting at a step ≡ 0 (mod 3): its scalars (and energy
+// test flags) in slots 0 .. count − 1.
 template <typename T>
 cudaGraphExec_t CudaEngine<T>::capture_steps(int count, bool ahead) {
   // No other engine's device-wide sync while this stream captures (cuda_check.cuh).
@@ -242,7 +243,7 @@ cudaGraphExec_t CudaEngine<T>::capture_steps(int count, bool ahead) {
   SINEW_CUDA_CHECK(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
   try {
     for (int k = 0; k < count; ++k)
-      launch_step(k, k, stream_, ahead, graph_blowup_ && k % interval_ == 0, nullptr,
+      launch_step(k, k, stream_, ahead, true, nullptr,
                   programmatic_);
   } catch (...) {
     cudaStreamEndCapture(stream_, &g);
@@ -257,14 +258,21 @@ cudaGraphExec_t CudaEngine<T>::capture_steps(int count, bool ahead) {
   return exec;
 }
 
-// The batch graph, and a short one of align_ steps for the aligned stretches shorter than a batch
-// between a run's outputs (probe rows every 90 steps would otherwise leave most steps to single
-// launches).
+// The batch graph, and shorter ones of 3 · 2^j steps for the stretches shorter than a batch
+// between a run's outputs (probe rows every 73 steps would otherwise leave most steps to single
+// launches: with one short graph of 30 steps, 60% of the 1 mm brow raise's steps were single).
+template <typename T>
+typename CudaEngine<T>::GraphSet CudaEngine<T>::capture_graph_set(bool ahead) {
+  GraphSet set;
+  set.batch = capture_steps(batch_, ahead);
+  for (int len = 3; len < batch_; len *= 2) set.shorter.push_back(capture_steps(len, ahead));
+  return set;
+}
+
 template <typename T>
 void CudaEngine<T>::build_graph() {
   destroy_graphs();
-  graph_ = capture_steps(batch_, slide_ahead_);
-  if (align_ < batch_) short_graph_ = capture_steps(int(align_), slide_ahead_);
+  graphs_ = capture_graph_set(slide_ahead_);
 }
 
 template <typename T>
@@ -352,7 +360,7 @@ void CudaEngine<T>::step(std::int64_t n) {
     const std::int64_t chunk_end = std::min(end, step_ + std::int64_t(kQueuedBatches) * batch_);
     snapshot();
     SINEW_CUDA_CHECK(cudaMemsetAsync(status_.get(), 0, sizeof(StepStatus), stream_));
-    const bool graphs = queue_steps(chunk_end, graph_, short_graph_);
+    const bool graphs = queue_steps(chunk_end, graphs_);
     StepStatus st = read_status();
     bool failed = st.bad_jacobian || st.bad_displacement || st.blowup;
     if (st.slide_miss && !failed && graphs && ++slide_miss_batches_ >= 2) {
@@ -370,13 +378,10 @@ void CudaEngine<T>::step(std::int64_t n) {
       // The chunk again with the lists refreshed inline: at graph speed rather than as single
       // synchronised steps (a chunk is up to kQueuedBatches batches: on the 1 mm brow raise in
       // long calls, replays one by one tripled the run's step time; docs/cuda-backend.md).
-      if (!inline_graph_) {
-        inline_graph_ = capture_steps(batch_, false);
-        if (align_ < batch_) inline_short_graph_ = capture_steps(int(align_), false);
-      }
+      if (!inline_graphs_.batch) inline_graphs_ = capture_graph_set(false);
       step_ = chunk_start;
       roll_back();
-      queue_steps(chunk_end, inline_graph_, inline_short_graph_);
+      queue_steps(chunk_end, inline_graphs_);
       st = read_status();
       failed = st.bad_jacobian || st.bad_displacement || st.blowup || st.slide_miss;
     }
@@ -390,27 +395,32 @@ void CudaEngine<T>::step(std::int64_t n) {
       }
       continue;
     }
-    // Without blow-up tests in the graph (a very long energy interval), the test at a sync point
-    // after a multiple of the interval.
-    if (!graph_blowup_ && (step_ - 1) / interval_ * interval_ >= chunk_start)
-      check_blowup(external_work());
   }
 }
 
 template <typename T>
-bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, cudaGraphExec_t graph,
-                                cudaGraphExec_t short_graph) {
+bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, const GraphSet& set) {
   bool graphs = false;
   while (step_ < chunk_end) {
-    if (step_ % align_ == 0 && chunk_end - step_ >= batch_) {
-      fill_scalars(step_, batch_, 0);
+    const std::int64_t left = chunk_end - step_;
+    int len = 0;  // the longest graph that fits
+    cudaGraphExec_t graph = nullptr;
+    if (step_ % 3 == 0) {
+      if (left >= batch_) {
+        len = batch_;
+        graph = set.batch;
+      } else {
+        for (std::size_t j = set.shorter.size(); j-- > 0 && !graph;)
+          if (left >= (std::int64_t(3) << j)) {
+            len = 3 << j;
+            graph = set.shorter[j];
+          }
+      }
+    }
+    if (graph) {
+      fill_scalars(step_, len, 0);
       SINEW_CUDA_CHECK(cudaGraphLaunch(graph, stream_));
-      step_ += batch_;
-      graphs = true;
-    } else if (short_graph && step_ % align_ == 0 && chunk_end - step_ >= align_) {
-      fill_scalars(step_, int(align_), 0);
-      SINEW_CUDA_CHECK(cudaGraphLaunch(short_graph, stream_));
-      step_ += align_;
+      step_ += len;
       graphs = true;
     } else {
       // Between the aligned stretches (outputs at any step): single launches, refreshing the
@@ -419,7 +429,7 @@ bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, cudaGraphExec_t graph,
       // steps 13% slower), and graphs captured per (phase, length) for these stretches (the
       // 1 mm brow raise's steps 20% slower: about 60 captures; the 0.5 mm one unchanged).
       fill_scalars(step_, 1, int(batch_));
-      launch_step(step_, int(batch_), stream_, false, graph_blowup_ && step_ % interval_ == 0);
+      launch_step(step_, int(batch_), stream_, false, true);
       ++step_;
     }
   }
@@ -437,7 +447,7 @@ StepStatus CudaEngine<T>::read_status() {
 
 template <typename T>
 std::vector<float> CudaEngine<T>::timed_graph_launches(int launches) {
-  while (step_ % align_ != 0) step(1);
+  while (step_ % 3 != 0) step(1);
   cudaEvent_t a, b;
   SINEW_CUDA_CHECK(cudaEventCreate(&a));
   SINEW_CUDA_CHECK(cudaEventCreate(&b));
@@ -446,7 +456,7 @@ std::vector<float> CudaEngine<T>::timed_graph_launches(int launches) {
   SINEW_CUDA_CHECK(cudaMemsetAsync(status_.get(), 0, sizeof(StepStatus), stream_));
   for (int k = 0; k < launches; ++k) {
     SINEW_CUDA_CHECK(cudaEventRecord(a, stream_));
-    SINEW_CUDA_CHECK(cudaGraphLaunch(graph_, stream_));
+    SINEW_CUDA_CHECK(cudaGraphLaunch(graphs_.batch, stream_));
     SINEW_CUDA_CHECK(cudaEventRecord(b, stream_));
     SINEW_CUDA_CHECK(cudaEventSynchronize(b));
     float t = 0;

@@ -94,16 +94,18 @@ __device__ __forceinline__ void blowup_test(double ke, double w_old, const StepS
   }
 }
 
-// Gather (or read and clear the atomic sums), then move_node and finish_node. kEnergyTest: blow-up
-// test steps.
+// Gather (or read and clear the atomic sums), then move_node and finish_node. kEnergyTest: the
+// blow-up test where the step's row flags it (*energy_flag ≠ 0; the same value for every block).
 template <typename T, bool kGather, bool kGravity, bool kEnergyTest, bool kProgram>
 __global__ void __launch_bounds__(kBlock)
     node_kernel(NodeData<T> d, const Vec3<T>* __restrict__ element_force,
                 Vec3<T>* __restrict__ f_sum, const Vec3<T>* __restrict__ u,
                 const Vec3<T>* __restrict__ up, Vec3<T>* __restrict__ un, StepStatus* status,
                 StepSums sums, ConstraintData<T> program, const std::int32_t* node_offset,
-                const T* factor) {
+                const T* factor, const T* energy_flag) {
   const std::int32_t i = std::int32_t(blockIdx.x * blockDim.x + threadIdx.x);
+  bool energy_test = false;
+  if constexpr (kEnergyTest) energy_test = *energy_flag != T(0);
   double ke = 0, w_old = 0;
   // Before the wait: offsets, inverse mass, u(n) and u(n−1) (written two launches back, by the
   // previous steps' node or constraint kernels). Bringing the program's data into L1 here as well
@@ -134,12 +136,11 @@ __global__ void __launch_bounds__(kBlock)
       f = f_sum[i];
       f_sum[i] = Vec3<T>{T(0), T(0), T(0)};
     }
-    const Vec3<T> v = move_node<T, kGravity>(d, i, f, ui, upi, im, status, sums, kEnergyTest, ke);
+    const Vec3<T> v = move_node<T, kGravity>(d, i, f, ui, upi, im, status, sums, energy_test, ke);
     finish_node<T, kGravity, kProgram, 0>(d, i, v, upi, up, un, sums, program, begin, end, factor,
-                                          kEnergyTest, w_old);
+                                          energy_test, w_old);
   }
-  if constexpr (kEnergyTest)
-    blowup_test(ke, w_old, sums, status, int(threadIdx.x), blockIdx.x, gridDim.x);
+  if (energy_test) blowup_test(ke, w_old, sums, status, int(threadIdx.x), blockIdx.x, gridDim.x);
 }
 
 }  // namespace sinew::simulator::cuda

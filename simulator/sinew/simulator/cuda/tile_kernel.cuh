@@ -63,7 +63,9 @@ __global__ void __launch_bounds__(kBlock, kTileMinBlocks<T>)
                 const T* __restrict__ activation, const Vec3<T>* __restrict__ up,
                 Vec3<T>* __restrict__ un, StepStatus* status, StepSums sums,
                 ConstraintData<T> program, const std::int32_t* node_offset, const T* factor,
-                bool energy_test) {
+                const T* energy_flag) {
+  // The blow-up test where the step's row flags it (null: none in this launch).
+  const bool energy_test = energy_flag != nullptr && *energy_flag != T(0);
   extern __shared__ __align__(16) unsigned char tile_shared[];
   Vec3<T>* const window = reinterpret_cast<Vec3<T>*>(tile_shared);  // [3][window points]
   Vec3<T>* const top = window + 3 * kTileWindowPoints;              // [2][4 corners][slots]
