@@ -536,8 +536,11 @@ void Session::loop() {
         log::warn("live: {}", e.what());
         changed_ = true;
       }
-      const double wall = seconds_since(t0);
+      const auto elapsed = Clock::now() - t0;
+      const double wall = std::chrono::duration<double>(elapsed).count();
       const std::int64_t done = backend.step_index() - n;
+      steps_run_ += done;
+      stepping_ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(elapsed).count();
       pending_steps_ = std::max<std::int64_t>(0, pending_steps_ - done);
       if (pending_steps_ == 0 && paused_) changed_ = true;  // show where stepping stopped
       step_ = backend.step_index();

@@ -90,6 +90,10 @@ class Session {
 
   // Test and bench hooks (thread-safe).
   std::int64_t step_index() const { return step_.load(); }
+  // Steps the engine thread has run since start (resets and replays do not lower it), and the
+  // wall time inside those step calls (s): the stepping speed without commands, frames or resets.
+  std::int64_t steps_run() const { return steps_run_.load(); }
+  double stepping_seconds() const { return 1e-9 * double(stepping_ns_.load()); }
   bool paused() const { return paused_.load(); }
   // Blocks until the engine thread has applied every command submitted so far (timeout s).
   bool wait_idle(double timeout_seconds);
@@ -128,7 +132,7 @@ class Session {
 
   std::thread thread_;
   std::atomic<bool> stop_{false}, paused_{false};
-  std::atomic<std::int64_t> step_{0};
+  std::atomic<std::int64_t> step_{0}, steps_run_{0}, stepping_ns_{0};
   // Engine-thread state.
   std::int64_t pending_steps_ = 0, chunk_ = 1;
   std::uint32_t last_id_ = 0;
