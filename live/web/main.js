@@ -150,7 +150,10 @@ function showStatus(s) {
       `t = ${s.time.toFixed(5)} s  step ${s.step}  ${s.paused ? (s.at_end ? 'end of scene (paused)' : 'paused') : 'running'}` +
       `  ${Math.round(s.steps_per_second)} steps/s  ${s.sim_seconds_per_wall_second.toPrecision(3)} sim s / wall s` +
       `  ${live.fps.toFixed(1)} frames/s` + (hello && hello.warnings.length ? `  warnings: ${hello.warnings.join('; ')}` : '');
-  if (!s.playback) $('playback').hidden = true;
+  if (!s.playback) {
+    $('playback').hidden = true;
+    for (const o of $('field').options) o.disabled = false;  // live: every field
+  }
   $('recording').textContent = s.recording ? ` recording to ${s.recording}` : '';
   $('record').textContent = s.recording ? 'Stop recording' : 'Record';
   $('message').textContent = s.error ? `engine: ${s.error}\n(reset, or lower activations and resume)` : '';
@@ -172,6 +175,10 @@ ws.addEventListener('message', (ev) => {
       $('playback').hidden = false;
       $('frame').max = m.playback.times.length - 1;
       $('frame_time').textContent = `t = ${m.playback.times[0].toFixed(4)} s`;
+      for (const o of $('field').options) {  // the element fields the file stores
+        o.disabled = !m.playback.fields.includes(o.value);
+        if (o.disabled) o.title = 'not in the results file (the scene\'s output.fields)';
+      }
     }
     $('radius').value = (m.drag_radius * 1e3).toFixed(1);
     $('radius_value').textContent = ` ${$('radius').value}`;

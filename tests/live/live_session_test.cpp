@@ -11,11 +11,15 @@
 #include <map>
 #include <thread>
 
+#include <hdf5.h>
+#include <nlohmann/json.hpp>
+
 #include "../simulator/sim_io_support.hpp"
 #include "live_support.hpp"
 #include "results_compare.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/formats/model_file.hpp"
 #include "sinew/live/session.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/run_setup.hpp"
@@ -307,6 +311,39 @@ TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
   std::memcpy(st, session.latest_frame()->data() + 16, 16);
   EXPECT_EQ(std::int64_t(st[0]), recorded.steps()[k]);
   EXPECT_EQ(st[1], recorded.times()[k]);
+  EXPECT_EQ(h[2], std::uint32_t(Field::displacement));
+
+  // Colour by the file's element fields: each skin vertex shows its embedding element's value of
+  // the frame, as the live view does (the model file's embedding of the skin, read here).
+  const auto model = formats::read_model(dir / "live_box.h5");
+  ASSERT_EQ(model.surfaces.size(), 1u);
+  const auto& embedding = model.surfaces[0].embedding_element;
+  const std::size_t nv = embedding.size();
+  ASSERT_EQ(frame_floats(session).size(), 4 * nv);
+  const auto show_field = [&](Field f, const char* dataset) {
+    SCOPED_TRACE(dataset);
+    Command c;
+    c.kind = Command::Kind::field;
+    c.field = f;
+    session.submit(c);
+    ASSERT_TRUE(session.wait_idle(10));
+    std::uint32_t fh[4];
+    std::memcpy(fh, session.latest_frame()->data(), 16);
+    EXPECT_EQ(fh[2], std::uint32_t(f));
+    const auto values = testing::frames_by_step(results, dataset).at(recorded.steps()[k]);
+    const auto floats = frame_floats(session);
+    for (std::size_t v = 0; v < nv; ++v)
+      ASSERT_EQ(floats[3 * nv + v], float(values[std::size_t(embedding[v])])) << "vertex " << v;
+    EXPECT_EQ(std::vector<float>(floats.begin(), floats.begin() + std::ptrdiff_t(3 * nv)),
+              std::vector<float>(shown.begin(), shown.begin() + std::ptrdiff_t(3 * nv)));
+  };
+  show_field(Field::jacobian, "/frames/J");
+  show_field(Field::von_mises, "/frames/von_mises");
+  const auto shown_stress = frame_floats(session);
+  EXPECT_NE(shown_stress, shown);  // the stress colours, not |u|
+  seek(std::int64_t(k) - 1);
+  seek(std::int64_t(k));  // scrubbing keeps the chosen field
+  EXPECT_EQ(frame_floats(session), shown_stress);
 
   // Continue: the scene is replayed to the frame's step; the engine's frame there is the file's.
   Command go;
@@ -328,11 +365,52 @@ TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   EXPECT_EQ(session.step_index(), recorded.steps()[k]);
   EXPECT_TRUE(session.paused());
-  EXPECT_EQ(frame_floats(session), shown);
+  // The engine's own frame there, coloured by its von Mises stress: the file's, bit for bit.
+  EXPECT_EQ(frame_floats(session), shown_stress);
   step(session, 10);  // live from there
   Command seek_now;
   seek_now.kind = Command::Kind::seek;
   EXPECT_THROW(session.submit(seek_now), ProtocolError);  // playback is over
+  session.stop();
+}
+
+TEST(LivePlayback, OffersOnlyTheElementFieldsTheFileStores) {
+  TempDir dir("live_play_fields");
+  const auto o = case_options(dir, "cpu");
+  auto ro = simulator::testing::options_for(o.scene_path, dir / "batch");
+  ro.device = "cpu";
+  simulator::run_scene(ro);
+  // The same file without the stress (as a scene whose output.fields lacks `stress` writes it).
+  const auto results = dir / "no_stress.h5";
+  std::filesystem::copy_file(dir / "batch/results.h5", results);
+  {
+    const hid_t f = H5Fopen(results.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    ASSERT_GE(H5Ldelete(f, "/frames/von_mises", H5P_DEFAULT), 0);
+    H5Fclose(f);
+  }
+  SessionOptions so;
+  so.play = results;
+  Session session(simulator::load_run(o, make_playback_setup), so);
+  const auto hello = nlohmann::json::parse(session.hello_json());
+  EXPECT_EQ(hello.at("playback").at("fields"), nlohmann::json::array({"displacement", "jacobian"}));
+  session.start();
+  Command c;
+  c.kind = Command::Kind::field;
+  c.field = Field::von_mises;
+  try {
+    session.submit(c);
+    ADD_FAILURE() << "von Mises accepted from a file without it";
+  } catch (const ProtocolError& e) {
+    EXPECT_NE(std::string(e.what()).find("/frames/von_mises"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'stress'"), std::string::npos) << e.what();
+  }
+  c.field = Field::jacobian;
+  session.submit(c);
+  ASSERT_TRUE(session.wait_idle(10));
+  std::uint32_t h[4];
+  std::memcpy(h, session.latest_frame()->data(), 16);
+  EXPECT_EQ(h[2], std::uint32_t(Field::jacobian));
   session.stop();
 }
 

@@ -59,6 +59,15 @@ SurfaceView make_surface_view(const formats::Model& model, const std::string& na
   return v;
 }
 
+// Where a results file stores an element field per frame (docs/results-format.md), and the scene's
+// output.fields entry that writes it.
+const char* results_dataset(Field f) {
+  return f == Field::von_mises ? "/frames/von_mises" : "/frames/J";
+}
+const char* output_field(Field f) {
+  return f == Field::von_mises ? "stress" : "J";
+}
+
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -88,9 +97,20 @@ Session::Session(simulator::LoadedRun run, SessionOptions options)
       throw FormatError(options_.play, "/frames/displacement",
                         fmt::format("{} nodes, but the scene's model has {}", playback_->nodes(),
                                     run_.model.node_count()));
+    json fields = json::array({field_name(Field::displacement)});
+    for (const auto f : {Field::von_mises, Field::jacobian}) {
+      const auto width = playback_->element_field_width(results_dataset(f));
+      if (width == 0) continue;
+      if (width != run_.model.element_count())
+        throw FormatError(options_.play, results_dataset(f),
+                          fmt::format("{} elements, but the scene's model has {}", width,
+                                      run_.model.element_count()));
+      fields.push_back(field_name(f));
+    }
     playback_hello_ = json({{"file", playback_->path()},
                             {"times", playback_->times()},
-                            {"steps", playback_->steps()}})
+                            {"steps", playback_->steps()},
+                            {"fields", fields}})
                           .dump();
     playing_ = true;
     paused_ = true;
@@ -132,6 +152,11 @@ void Session::submit(const Command& c) {
     throw ProtocolError("playing back a results file: continue from a frame first");
   if (!playing_ && playback_command)
     throw ProtocolError("not playing back a results file (sinew-live --play RESULTS.h5)");
+  if (playing_ && c.kind == Command::Kind::field && c.field != Field::displacement &&
+      !playback_->has_element_field(results_dataset(c.field)))
+    throw ProtocolError(
+        fmt::format("the results file has no {} ({}: the scene's output.fields '{}' writes it)",
+                    field_name(c.field), results_dataset(c.field), output_field(c.field)));
   if (c.kind == Command::Kind::drag && run_.backend->force_slot_count() == 0)
     throw ProtocolError(run_.resolved.setup.effects.loads
                             ? "drag forces are not available on this backend (use --device cpu)"
@@ -304,6 +329,7 @@ void Session::apply(const Command& c) {
       break;
     case Command::Kind::field:
       field_ = c.field;
+      if (playing_) seek(shown_frame_);  // the shown frame in the new colours
       break;
     case Command::Kind::seek:
       seek(std::size_t(c.count));
@@ -380,7 +406,12 @@ void Session::finish_recording() {
 void Session::publish_frame() {
   if (playing_) return;  // playback shows the file's frames (seek), not the engine's
   auto& backend = *run_.backend;
-  publish_surface(backend.displacements(surface_.nodes), backend.step_index(),
+  std::vector<double> values;
+  if (field_ != Field::displacement) {
+    auto fields = backend.element_fields();
+    values = std::move(field_ == Field::von_mises ? fields.von_mises : fields.jacobian);
+  }
+  publish_surface(backend.displacements(surface_.nodes), values, backend.step_index(),
                   backend.time() / run_.resolved.setup.time_scaling);
 }
 
@@ -391,26 +422,28 @@ void Session::seek(std::size_t frame) {
   for (auto n : surface_.nodes)
     for (std::size_t k = 0; k < 3; ++k) sub.push_back(u[3 * std::size_t(n) + k]);
   shown_frame_ = frame;
-  field_ = Field::displacement;  // the file's element fields are not streamed in playback
-  publish_surface(sub, playback_->steps()[frame], playback_->times()[frame]);
+  // submit() lets only the file's fields through; the file's own values, as the live view's.
+  const auto values = field_ == Field::displacement
+                          ? std::vector<double>{}
+                          : playback_->element_field(results_dataset(field_), frame);
+  publish_surface(sub, values, playback_->steps()[frame], playback_->times()[frame]);
 }
 
-void Session::publish_surface(const std::vector<double>& sub, std::int64_t step, double time) {
-  auto& backend = *run_.backend;
+void Session::publish_surface(const std::vector<double>& sub,
+                              const std::vector<double>& element_values, std::int64_t step,
+                              double time) {
   const std::size_t nv = surface_.weights.size();
   std::vector<float> disp(nv * 3), values(nv);
-  simulator::ElementFields fields;
-  if (field_ != Field::displacement) fields = backend.element_fields();
   for (std::size_t v = 0; v < nv; ++v) {
     double d[3] = {0, 0, 0};
     for (const auto& [slot, w] : surface_.weights[v])
       for (std::size_t k = 0; k < 3; ++k) d[k] += w * sub[3 * slot + k];
     for (std::size_t k = 0; k < 3; ++k) disp[3 * v + k] = float(d[k]);
-    const auto e = std::size_t(surface_.element[v]);
-    values[v] = field_ == Field::von_mises ? float(fields.von_mises[e])
-                : field_ == Field::jacobian
-                    ? float(fields.jacobian[e])
-                    : float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    // An element field: the value of the vertex's embedding element (one-point quadrature makes
+    // it constant per element; no smoothing, so the colours show the elements' own values).
+    values[v] = field_ == Field::displacement
+                    ? float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
+                    : float(element_values[std::size_t(surface_.element[v])]);
   }
   publish(
       std::make_shared<const std::string>(encode_frame(step, time, field_, last_id_, disp, values)),

@@ -103,8 +103,10 @@ class Session {
   void loop();
   void apply(const Command& c);
   void publish_frame();
-  // Frame from the displacements of surface_.nodes (3 per node, m).
-  void publish_surface(const std::vector<double>& sub, std::int64_t step, double time);
+  // Frame from the displacements of surface_.nodes (3 per node, m) and, when field_ is an element
+  // field, its value per model element (E values).
+  void publish_surface(const std::vector<double>& sub, const std::vector<double>& element_values,
+                       std::int64_t step, double time);
   void seek(std::size_t frame);
   void publish_status();
   // Keeps msg as the latest of its kind (for new clients) and hands it to the sink.
