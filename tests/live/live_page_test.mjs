@@ -2,7 +2,8 @@
 // open the page, receive frames, move the muscle slider and see the skin contract in the streamed
 // positions, click-drag on the skin and see the picked region move, pause and resume, record, then
 // check that sinew-render reads the recording and that sinew-simulate on the reproducing scene
-// gives the same bits; take a screenshot that is not blank and shows the colour bar.
+// gives the same bits; take a screenshot that is not blank and shows the colour bar; play the
+// recording back (sinew-live --play), scrub to its last frame and colour it by von Mises stress.
 //
 // Environment: SINEW_LIVE, SINEW_SIMULATE, SINEW_RENDER, LIVE_TEST_MODEL, LIVE_COMPARE (programs),
 // NODE_MODULES (where puppeteer-core is), CHROMIUM (the browser), WORK (a scratch folder),
@@ -45,7 +46,7 @@ const server = spawn(env.SINEW_LIVE, ['live_box.yaml', '--device', 'cpu', '--thr
 let out = '';
 server.stdout.on('data', (d) => { out += d; });
 server.stderr.on('data', (d) => { out += d; });
-let browser;
+let browser, player;
 try {
   for (let k = 0; k < 300 && !/open (http\S+)/.test(out); ++k) await sleep(50);
   const url = (out.match(/open (http\S+)/) || [])[1];
@@ -150,7 +151,48 @@ try {
   const cmp = run(env.LIVE_COMPARE, [path.join(rec, 'results.h5'),
                                      path.join(work, 'reproduced', 'results.h5')]);
   check(/ 0 differ/.test(cmp), `the reproduced scene gives the same bits (${cmp.trim()})`);
+
+  // Playback of the recording: scrub to its last frame, colour it by the file's von Mises stress.
+  await page.close();
+  server.kill('SIGINT');
+  player = spawn(env.SINEW_LIVE, ['--play', path.join(rec, 'results.h5'), '--device', 'cpu',
+                                  '--threads', '1', '--port', '0'], { cwd: work });
+  let played = '';
+  player.stdout.on('data', (d) => { played += d; });
+  player.stderr.on('data', (d) => { played += d; });
+  for (let k = 0; k < 300 && !/open (http\S+)/.test(played); ++k) await sleep(50);
+  const playUrl = (played.match(/open (http\S+)/) || [])[1];
+  check(playUrl, `sinew-live --play printed its URL (${playUrl}; ${played.trim()})`);
+  const view = await browser.newPage();
+  await view.setViewport({ width: 1100, height: 700 });
+  view.on('pageerror', (e) => errors.push(String(e)));
+  await view.goto(playUrl);
+  const shown = (expr) => view.evaluate(expr);
+  const waitShown = async (expr, what) => {
+    const t0 = Date.now();
+    while (Date.now() - t0 < 20000) {
+      if (await shown(expr)) return;
+      await sleep(50);
+    }
+    fail(`timed out waiting for ${what} (page errors: ${errors.join('; ')})`);
+  };
+  await waitShown("window.sinewLive.frames > 0 && !document.getElementById('playback').hidden",
+                  'the playback controls and a frame');
+  const last = await shown("Number(document.getElementById('frame').max)");
+  check(last > 0 && await shown("!document.querySelector('#field option[value=von_mises]').disabled"),
+        `playback offers the file's ${last + 1} frames and its von Mises stress`);
+  await view.$eval('#frame', (s) => { s.value = s.max; s.dispatchEvent(new Event('input')); });
+  await waitShown(`window.sinewLive.status && window.sinewLive.status.playback.frame === ${last}`,
+                  'the last frame');
+  await view.select('#field', 'von_mises');
+  await waitShown("window.sinewLive.field === 'von_mises' && window.sinewLive.max > 0",
+                  'the von Mises colours');
+  const bar = await shown("document.getElementById('bar_label').textContent + ': ' + " +
+                          "document.getElementById('bar_max').textContent");
+  check(/Pa/.test(bar), `the played-back frame is coloured by von Mises stress (${bar})`);
+  check(errors.length === 0, `no page errors in playback (${errors.join('; ')})`);
 } finally {
   if (browser) await browser.close();
   server.kill('SIGINT');
+  if (player) player.kill('SIGINT');
 }
