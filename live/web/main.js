@@ -180,6 +180,11 @@ ws.addEventListener('message', (ev) => {
         if (o.disabled) o.title = 'not in the results file (the scene\'s output.fields)';
       }
     }
+    if (!m.drag) {  // the server says why (no effect 'loads', or a backend without force slots)
+      $('drag_refusal').textContent = `No dragging here: ${m.drag_refusal}.`;
+      $('drag_refusal').hidden = false;
+      $('radius').disabled = $('stiffness').disabled = true;
+    }
     $('radius').value = (m.drag_radius * 1e3).toFixed(1);
     $('radius_value').textContent = ` ${$('radius').value}`;
   } else if (m.type === 'role') {

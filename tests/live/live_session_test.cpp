@@ -374,6 +374,41 @@ TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
   session.stop();
 }
 
+TEST_P(LiveSession, DragIsRefusedWithTheReasonWhenTheSceneHasNoLoads) {
+  TempDir dir("live_no_loads");
+  auto o = case_options(dir, GetParam());
+  auto text = testing::live_scene_text("live_box.h5");
+  const auto at = text.find(", loads]");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 8, "]");
+  o.scene_path = dir / "no_loads.yaml";
+  simulator::testing::write_file(o.scene_path, text);
+  Session session(simulator::load_run(o, make_live_setup), SessionOptions{});
+  const auto hello = nlohmann::json::parse(session.hello_json());
+  EXPECT_FALSE(hello.at("drag").get<bool>());
+  EXPECT_EQ(hello.at("drag_refusal"), "dragging needs the scene's effect 'loads'");
+  Command drag;
+  drag.kind = Command::Kind::drag;
+  drag.point = {0.024, 0.004, 0.006};
+  drag.force = {0, 0, 0.004};
+  drag.radius = 0.0025;
+  try {
+    session.submit(drag);
+    ADD_FAILURE() << "a drag accepted without the effect 'loads'";
+  } catch (const ProtocolError& e) {
+    EXPECT_EQ(std::string(e.what()), "dragging needs the scene's effect 'loads'");
+  }
+  // With 'loads', hello offers dragging exactly where the backend has the force slot.
+  TempDir with("live_loads");
+  Session loads(simulator::load_run(case_options(with, GetParam()), make_live_setup),
+                SessionOptions{});
+  const auto offered = nlohmann::json::parse(loads.hello_json());
+  EXPECT_EQ(offered.at("drag").get<bool>(), offered.at("drag_refusal").is_null());
+  if (GetParam() == "cpu") {
+    EXPECT_TRUE(offered.at("drag").get<bool>());
+  }
+}
+
 TEST(LivePlayback, OffersOnlyTheElementFieldsTheFileStores) {
   TempDir dir("live_play_fields");
   const auto o = case_options(dir, "cpu");

@@ -157,10 +157,7 @@ void Session::submit(const Command& c) {
     throw ProtocolError(
         fmt::format("the results file has no {} ({}: the scene's output.fields '{}' writes it)",
                     field_name(c.field), results_dataset(c.field), output_field(c.field)));
-  if (c.kind == Command::Kind::drag && run_.backend->force_slot_count() == 0)
-    throw ProtocolError(run_.resolved.setup.effects.loads
-                            ? "drag forces are not available on this backend (use --device cpu)"
-                            : "dragging needs the scene's effect 'loads'");
+  if (c.kind == Command::Kind::drag && !drag_refusal().empty()) throw ProtocolError(drag_refusal());
   std::lock_guard lock(mutex_);
   if (queue_.size() >= 4096) throw ProtocolError("too many queued commands: dropped");
   queue_.push_back(c);
@@ -173,6 +170,15 @@ bool Session::wait_idle(double timeout_seconds) {
   const std::uint64_t target = submitted_;
   return idle_.wait_for(lock, std::chrono::duration<double>(timeout_seconds),
                         [&] { return applied_ >= target; });
+}
+
+std::string Session::drag_refusal() const {
+  // The slot exists when the plan asked for one (make_live_setup: effect 'loads') and the backend
+  // has force slots: whichever backend that is, the drag goes through Backend::set_force_slot.
+  if (run_.backend->force_slot_count() > 0) return "";
+  return run_.resolved.setup.effects.loads
+             ? "drag forces are not available on this backend (use --device cpu)"
+             : "dragging needs the scene's effect 'loads'";
 }
 
 std::string Session::last_error() const {
@@ -212,7 +218,8 @@ std::string Session::hello_json() const {
             {"frame_bytes", kFrameHeaderBytes + 16 * (surface_.rest.size() / 3)},
             {"frame_rate", options_.frame_rate},
             {"muscles", setup.effects.muscles ? muscles : json::array()},
-            {"drag", run_.backend->force_slot_count() > 0},
+            {"drag", drag_refusal().empty()},
+            {"drag_refusal", drag_refusal().empty() ? json(nullptr) : json(drag_refusal())},
             {"drag_radius", options_.drag_radius_default > 0 ? options_.drag_radius_default
                                                              : 3 * run_.model.grid.voxel_size},
             {"warnings", run_.summary.warnings}};
@@ -280,11 +287,11 @@ void Session::apply(const Command& c) {
       break;
     }
     case Command::Kind::drag: {
-      auto nodes = nodes_near(c.point, c.radius);
+      // While a drag is held its nodes stay those picked first; only the force follows the mouse
+      // (so the search, which copies every node's displacement off a GPU, runs once per press).
+      const auto nodes = dragging_ ? log_.drags.back().nodes : nodes_near(c.point, c.radius);
       if (nodes.empty())
         throw ProtocolError(fmt::format("no node within {:.4g} m of the picked point", c.radius));
-      // While a drag is held its nodes stay those picked first; only the force follows the mouse.
-      if (dragging_) nodes = log_.drags.back().nodes;
       // Per node total · (1 / n): exactly how prepare_model spreads the reproducing scene's force.
       const double k = 1.0 / double(nodes.size());
       const std::array<double, 3> per_node{c.force[0] * k, c.force[1] * k, c.force[2] * k};

@@ -98,6 +98,9 @@ class Session {
   // Blocks until the engine thread has applied every command submitted so far (timeout s).
   bool wait_idle(double timeout_seconds);
   std::string last_error() const;
+  // Why a drag would be refused ("" when dragging works): the scene lacks the effect 'loads', or
+  // the backend has no force slots. Sent in "hello" for the page to say.
+  std::string drag_refusal() const;
 
  private:
   void loop();
