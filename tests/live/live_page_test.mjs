@@ -41,8 +41,11 @@ const run = (cmd, args) => {
 };
 run(env.LIVE_TEST_MODEL, [work]);
 
+// With an access token (as any non-loopback bind has): the page, its scripts and three.js load by
+// the URL's ?token= and the cookie the server sets.
 const server = spawn(env.SINEW_LIVE, ['live_box.yaml', '--device', 'cpu', '--threads', '1',
-                                      '--port', '0', '--frame-rate', '20', '--speed', '0.1'], { cwd: work });
+                                      '--port', '0', '--frame-rate', '20', '--speed', '0.1',
+                                      '--token', 'page-test-token'], { cwd: work });
 let out = '';
 server.stdout.on('data', (d) => { out += d; });
 server.stderr.on('data', (d) => { out += d; });
@@ -50,7 +53,7 @@ let browser, player;
 try {
   for (let k = 0; k < 300 && !/open (http\S+)/.test(out); ++k) await sleep(50);
   const url = (out.match(/open (http\S+)/) || [])[1];
-  check(url, `sinew-live printed its URL (${url})`);
+  check(url && url.endsWith('?token=page-test-token'), `sinew-live printed its URL (${url})`);
 
   browser = await puppeteer.launch({
     executablePath: env.CHROMIUM, headless: true,
