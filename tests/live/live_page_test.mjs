@@ -193,6 +193,15 @@ try {
   const bar = await shown("document.getElementById('bar_label').textContent + ': ' + " +
                           "document.getElementById('bar_max').textContent");
   check(/Pa/.test(bar), `the played-back frame is coloured by von Mises stress (${bar})`);
+  // Continue from it: the scene replayed to the frame's step, then live there (paused), with the
+  // engine's own von Mises colours.
+  const fileStep = await shown('window.sinewLive.step');
+  await view.click('#continue');
+  await waitShown('window.sinewLive.status.playback === null && window.sinewLive.status.paused && ' +
+                  `window.sinewLive.status.step === ${fileStep} && window.sinewLive.step === ${fileStep} && ` +
+                  "window.sinewLive.field === 'von_mises' && document.getElementById('playback').hidden",
+                  `continuing from the frame at step ${fileStep}`);
+  check(fileStep > 0, `continue replays to the frame's step ${fileStep} and goes on live there`);
   check(errors.length === 0, `no page errors in playback (${errors.join('; ')})`);
 } finally {
   if (browser) await browser.close();

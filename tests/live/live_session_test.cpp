@@ -375,6 +375,22 @@ TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
   session.stop();
 }
 
+TEST_P(LiveSession, PausesAtTheScenesLastStep) {
+  TempDir dir("live_end");
+  auto run = simulator::load_run(case_options(dir, GetParam()), make_live_setup);
+  const std::int64_t end = run.backend->plan().steps;
+  ASSERT_GT(end, 1000);
+  Session session(std::move(run), SessionOptions{});
+  session.start();
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!session.paused() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  ASSERT_TRUE(session.paused());
+  // Exactly where the batch run ends, whatever the chunk of steps in flight.
+  EXPECT_EQ(session.step_index(), end);
+  session.stop();
+}
+
 TEST_P(LiveSession, DragIsRefusedWithTheReasonWhenTheSceneHasNoLoads) {
   TempDir dir("live_no_loads");
   auto o = case_options(dir, GetParam());

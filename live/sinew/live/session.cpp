@@ -563,6 +563,9 @@ void Session::loop() {
       std::int64_t k = chunk_;
       if (pending_steps_ > 0) k = std::min(k, pending_steps_);
       if (writer_ && next_record_ > n) k = std::min(k, next_record_ - n);
+      // The pause at the scene's end falls on its last step, where the batch run ends.
+      const std::int64_t end = run_.backend->plan().steps;
+      if (options_.pause_at_end && !at_end_ && n < end) k = std::min(k, end - n);
       const auto t0 = Clock::now();
       try {
         backend.step(k);
