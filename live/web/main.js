@@ -5,7 +5,8 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
 const token = params.get('token');
-const upAxis = params.get('up') === 'y' ? 'y' : 'z';  // ?up=y for models modelled y-up (the face)
+// The model's up axis: ?up=y|z in the URL, else what sinew-live was told (--up, in "hello").
+let upAxis = params.get('up') === 'y' ? 'y' : 'z';
 const ws = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws` +
                          (token ? `?token=${encodeURIComponent(token)}` : ''));
 ws.binaryType = 'arraybuffer';
@@ -190,6 +191,7 @@ ws.addEventListener('message', (ev) => {
   const m = JSON.parse(ev.data);
   if (m.type === 'hello') {
     hello = m;
+    if (!params.has('up') && m.up === 'y') upAxis = 'y';
     $('title').textContent = m.title || m.scene;
     m.muscles.forEach(muscleRow);
     if (m.playback) {

@@ -162,6 +162,7 @@ TEST_F(LiveServer, GreetsAndStreamsFramesOfTheDocumentedSize) {
   const json hello = c.next("hello", 1);
   EXPECT_EQ(hello["muscles"][0]["name"], "flexor");
   EXPECT_TRUE(hello["drag"].get<bool>());
+  EXPECT_EQ(hello["up"], "z");  // the page's camera (sinew-live --up)
   auto [mesh, binary] = c.read();
   ASSERT_TRUE(binary);
   std::uint32_t h[4];

@@ -217,6 +217,7 @@ std::string Session::hello_json() const {
             {"triangles", surface_.triangles.size() / 3},
             {"frame_bytes", kFrameHeaderBytes + 16 * (surface_.rest.size() / 3)},
             {"frame_rate", options_.frame_rate},
+            {"up", options_.up},
             {"muscles", setup.effects.muscles ? muscles : json::array()},
             {"drag", drag_refusal().empty()},
             {"drag_refusal", drag_refusal().empty() ? json(nullptr) : json(drag_refusal())},

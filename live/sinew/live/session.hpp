@@ -51,6 +51,7 @@ struct SessionOptions {
   std::string surface;             // visual surface to stream ("" the first visual one)
   double drag_radius_default = 0;  // m (0: 3 voxels)
   std::string play;                // a results file to scrub through first (playback.hpp)
+  std::string up = "z";            // the model's up axis for the page's camera: "y" or "z"
 };
 
 // What the page needs to draw the model: the streamed surface at rest.
