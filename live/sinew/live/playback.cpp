@@ -44,10 +44,6 @@ std::vector<double> RecordedRun::displacement(std::size_t k) const {
   return read_frame("/frames/displacement", k, nodes_ * 3);
 }
 
-bool RecordedRun::has_element_field(const std::string& dataset) const {
-  return element_field_width(dataset) > 0;
-}
-
 std::size_t RecordedRun::element_field_width(const std::string& dataset) const {
   for (const auto& [name, width] : element_fields_)
     if (name == dataset) return width;

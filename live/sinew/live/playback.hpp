@@ -26,10 +26,9 @@ class RecordedRun {
   // u of frame k, N × 3, m. Throws FormatError for k out of range or an unreadable frame.
   std::vector<double> displacement(std::size_t k) const;
   // An element field the file stores per frame (docs/results-format.md: "/frames/von_mises", Pa,
-  // and "/frames/J", written when the scene's output.fields has `stress` / `J`): whether it is
-  // there, its element count (0 when absent), and frame k of it (E values). element_field throws
+  // and "/frames/J", written when the scene's output.fields has `stress` / `J`): its element
+  // count (0 when the file has none), and frame k of it (E values). element_field throws
   // FormatError for k out of range, a missing dataset or an unreadable frame.
-  bool has_element_field(const std::string& dataset) const;
   std::size_t element_field_width(const std::string& dataset) const;
   std::vector<double> element_field(const std::string& dataset, std::size_t k) const;
   // The scene to continue with: scene.yaml next to the file when there is one (a live recording's

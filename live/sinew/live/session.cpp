@@ -106,6 +106,7 @@ Session::Session(simulator::LoadedRun run, SessionOptions options)
                           fmt::format("{} elements, but the scene's model has {}", width,
                                       run_.model.element_count()));
       fields.push_back(field_name(f));
+      playback_fields_[std::size_t(f)] = true;
     }
     playback_hello_ = json({{"file", playback_->path()},
                             {"times", playback_->times()},
@@ -152,8 +153,8 @@ void Session::submit(const Command& c) {
     throw ProtocolError("playing back a results file: continue from a frame first");
   if (!playing_ && playback_command)
     throw ProtocolError("not playing back a results file (sinew-live --play RESULTS.h5)");
-  if (playing_ && c.kind == Command::Kind::field && c.field != Field::displacement &&
-      !playback_->has_element_field(results_dataset(c.field)))
+  // playback_fields_, fixed at construction: playback_ itself goes when the engine continues.
+  if (playing_ && c.kind == Command::Kind::field && !playback_fields_[std::size_t(c.field)])
     throw ProtocolError(
         fmt::format("the results file has no {} ({}: the scene's output.fields '{}' writes it)",
                     field_name(c.field), results_dataset(c.field), output_field(c.field)));

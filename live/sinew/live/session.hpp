@@ -9,6 +9,7 @@
 // frame when 1/frame_rate has passed (or right after a command, so its effect is shown at once).
 // Publishing copies the skin's displacement and hands the encoded frame to the sink; the sink
 // (the server) must not block: a slow client drops frames, the engine never waits for it.
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -157,6 +158,8 @@ class Session {
   std::atomic<bool> playing_{false};
   std::size_t shown_frame_ = 0;
   std::string playback_hello_;  // the frames' times and steps for "hello" (fixed at start)
+  // The fields the file can colour by, by Field (fixed at start; submit() reads it).
+  std::array<bool, 3> playback_fields_{true, false, false};
 };
 
 }  // namespace sinew::live
