@@ -391,6 +391,27 @@ TEST_P(LiveSession, PausesAtTheScenesLastStep) {
   session.stop();
 }
 
+TEST_P(LiveSession, SpeedCapHoldsWhateverTheChunkOfSteps) {
+  // --speed 0.1 on the block (Δt ≈ 0.2 ms: a chunk of a few dozen steps is ~10 ms of scene time,
+  // more than 0.1 × a frame period): the simulated time stays within the cap plus one chunk.
+  TempDir dir("live_speed");
+  auto run = simulator::load_run(case_options(dir, GetParam()), make_live_setup);
+  const double dt = run.backend->dt() / run.resolved.setup.time_scaling;
+  const double chunk = double(std::max<std::int64_t>(1, run.backend->preferred_step_count())) * dt;
+  SessionOptions so;
+  so.max_speed = 0.1;
+  so.frame_rate = 20;
+  Session session(std::move(run), so);
+  const auto t0 = std::chrono::steady_clock::now();
+  session.start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const double simulated = double(session.step_index()) * dt;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  session.stop();
+  EXPECT_GT(simulated, 0.0);
+  EXPECT_LE(simulated, 0.1 * wall + chunk) << "wall " << wall << " s, chunk " << chunk << " s";
+}
+
 TEST_P(LiveSession, DragIsRefusedWithTheReasonWhenTheSceneHasNoLoads) {
   TempDir dir("live_no_loads");
   auto o = case_options(dir, GetParam());

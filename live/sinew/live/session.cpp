@@ -513,7 +513,7 @@ void Session::loop() {
   // since pace_wall; restarted whenever the engine was not running.
   auto pace_wall = Clock::now();
   std::int64_t pace_step = backend.step_index();
-  std::int64_t rate_steps = 0;
+  std::int64_t rate_steps = 0, last_frame_step = -1;
   chunk_ = 1;
   if (playing_)
     seek(0);
@@ -561,7 +561,16 @@ void Session::loop() {
       pace_wall = Clock::now();
       pace_step = backend.step_index();
     }
-    if (run) {
+    // Simulated time ahead of max_speed × wall time since pace_wall, in wall seconds (≤ 0: behind).
+    const auto ahead = [&] {
+      return double(backend.step_index() - pace_step) * backend.dt() /
+                 run_.resolved.setup.time_scaling / options_.max_speed -
+             seconds_since(pace_wall);
+    };
+    // Paced: no step while ahead (the wait below is at most a frame period, so a chunk's lead is
+    // waited off over as many turns as it takes).
+    const bool step_now = run && !(options_.max_speed > 0 && pending_steps_ == 0 && ahead() > 0);
+    if (step_now) {
       std::int64_t k = chunk_;
       if (pending_steps_ > 0) k = std::min(k, pending_steps_);
       if (writer_ && next_record_ > n) k = std::min(k, next_record_ - n);
@@ -604,9 +613,10 @@ void Session::loop() {
       rate_steps = 0;
     }
     const bool frame_due = seconds_since(last_frame) >= frame_period;
-    if (changed_ || (run && frame_due)) {
+    if (changed_ || (frame_due && backend.step_index() != last_frame_step)) {
       publish_frame();
       last_frame = Clock::now();
+      last_frame_step = backend.step_index();
     }
     if (changed_ || seconds_since(last_status) >= 0.25) {
       publish_status();
@@ -614,12 +624,10 @@ void Session::loop() {
     }
     changed_ = false;
     if (run && options_.max_speed > 0) {
-      const double ahead = double(backend.step_index() - pace_step) * backend.dt() /
-                               run_.resolved.setup.time_scaling / options_.max_speed -
-                           seconds_since(pace_wall);
-      if (ahead > 0) {
+      const double lead = ahead();
+      if (lead > 0) {
         std::unique_lock lock(mutex_);
-        wake_.wait_for(lock, std::chrono::duration<double>(std::min(ahead, frame_period)),
+        wake_.wait_for(lock, std::chrono::duration<double>(std::min(lead, frame_period)),
                        [&] { return !queue_.empty() || stop_.load(); });
       }
     }
