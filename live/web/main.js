@@ -132,6 +132,7 @@ function muscleRow(m) {
   const [slider, button] = [row.querySelector('input'), row.querySelector('button')];
   slider.dataset.muscle = m.name;
   slider.addEventListener('input', () => {
+    slider.dataset.movedAt = performance.now();
     row.querySelector('.v').textContent = Number(slider.value).toFixed(2);
     send({ type: 'activation', muscle: m.name, value: Number(slider.value) });
   });
@@ -143,10 +144,12 @@ function muscleRow(m) {
 }
 
 // Each muscle row shows the engine's override (status.overrides), so a refused value (above what
-// the time step was planned for) does not stay on the page; not while the slider is being moved.
+// the time step was planned for) does not stay on the page; not within a second of moving it (the
+// status may predate the move).
 function showOverrides(overrides) {
+  const now = performance.now();
   for (const slider of document.querySelectorAll('#muscles input')) {
-    if (document.activeElement === slider || !(slider.dataset.muscle in overrides)) continue;
+    if (now - Number(slider.dataset.movedAt || -1e9) < 1000 || !(slider.dataset.muscle in overrides)) continue;
     const a = overrides[slider.dataset.muscle];
     slider.parentElement.querySelector('.v').textContent = a === null ? 'curve' : a.toFixed(2);
     if (a !== null) slider.value = a;
