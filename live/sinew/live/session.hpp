@@ -7,8 +7,8 @@
 // the Backend's steering calls, i.e. the BackendCore: never a new plan), write a recorded frame
 // when one falls due, run a chunk of steps sized to ~chunk_seconds of wall time, and publish a
 // frame when 1/frame_rate has passed and it stepped (or right after a command, so its effect is
-// shown at once). Publishing copies the skin's displacement and hands the encoded frame to the sink; the sink
-// (the server) must not block: a slow client drops frames, the engine never waits for it.
+// shown at once). Publishing copies the skin's displacement and hands the encoded frame to the
+// sink; the sink (the server) must not block: a slow client drops frames, the engine never waits.
 #include <array>
 #include <atomic>
 #include <condition_variable>
