@@ -8,8 +8,8 @@
 //     the first muscle's slider, alternating between its curve's peak and half of it (inside the
 //     activation range the scene itself plans for: the live plan would accept up to 1, but one
 //     muscle held above its scene's peak long past the scene's end inverted an element of the
-//     1 mm forehead, and the bench measures speed, not how far the model can be pushed), and when a frame's scene time passes the duration it
-//     sends "reset" (step 0, overrides cleared). Reported: steps/s and simulated seconds per wall
+//     1 mm forehead, and the bench measures speed, not how far the model can be pushed), and
+//     when a frame's scene time passes the duration it sends "reset" (step 0, overrides cleared). Reported: steps/s and simulated seconds per wall
 //     second over the whole measurement (resets, commands and frames included) and over the
 //     engine's step calls alone, frames/s received, the resets (count, message → first frame
 //     after it), and the ratio live / batch;
