@@ -9,10 +9,10 @@
 //     activation range the scene itself plans for: the live plan would accept up to 1, but one
 //     muscle held above its scene's peak long past the scene's end inverted an element of the
 //     1 mm forehead, and the bench measures speed, not how far the model can be pushed), and
-//     when a frame's scene time passes the duration it sends "reset" (step 0, overrides cleared). Reported: steps/s and simulated seconds per wall
-//     second over the whole measurement (resets, commands and frames included) and over the
-//     engine's step calls alone, frames/s received, the resets (count, message → first frame
-//     after it), and the ratio live / batch;
+//     when a frame's scene time passes the duration it sends "reset" (step 0, overrides cleared).
+//     Reported: steps/s and simulated seconds per wall second over the whole measurement (resets,
+//     commands and frames included) and over the engine's step calls alone, frames/s received,
+//     the resets (count, message → first frame after it), and the ratio live / batch;
 //  3. latency: the time from sending a slider message to the first frame whose header carries its
 //     id (the engine applied it, stepped, and the frame arrived): median and 99th percentile.
 // An instability in either part stops the bench with the engine's message (exit status 3).
