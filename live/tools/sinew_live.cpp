@@ -4,7 +4,7 @@
 //
 //   sinew-live [SCENE] [--play RESULTS.h5] [--device auto|cpu|cuda] [--port P] [--host H] [--record DIR] [--explain]
 //              [--precision float|double] [--threads N] [--paused] [--frame-rate F] [--speed S]
-//              [--surface NAME] [--token T] [--web DIR] [--three DIR] [-q] [-v]
+//              [--surface NAME] [--up z|y] [--token T] [--web DIR] [--three DIR] [-q] [-v]
 //
 // Exit status: 0 stopped (Ctrl-C), 1 bad input or I/O error, 2 bad command line.
 #include <fmt/format.h>
@@ -65,6 +65,11 @@ int main(int argc, char** argv) {
       ->default_val(0)
       ->check(CLI::NonNegativeNumber);
   app.add_option("--surface", so.surface, "Visual surface to show (default: the first)");
+  app.add_option("--up", so.up,
+                 "The model's up axis, for the page's camera: z, or y for the face and forehead "
+                 "(the page's ?up= overrides it)")
+      ->default_val("z")
+      ->check(CLI::IsMember({"y", "z"}));
   app.add_option("--web", web, "Folder of the page")->default_val(web);
   app.add_option("--three", three, "three.js package folder (scripts/install-deps puts it there)")
       ->default_val(three);

@@ -5,7 +5,8 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
 const token = params.get('token');
-const upAxis = params.get('up') === 'y' ? 'y' : 'z';  // ?up=y for models modelled y-up (the face)
+// The model's up axis: ?up=y|z in the URL, else what sinew-live was told (--up, in "hello").
+let upAxis = params.get('up') === 'y' ? 'y' : 'z';
 const ws = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws` +
                          (token ? `?token=${encodeURIComponent(token)}` : ''));
 ws.binaryType = 'arraybuffer';
@@ -27,7 +28,7 @@ const controls = new OrbitControls(camera, renderer.domElement);
 let mesh = null, rest = null, positions = null, colours = null, vertexCount = 0;
 let hello = null, steering = false, nextId = 1;
 const live = { frames: 0, framesAtLast: 0, lastRate: performance.now(), fps: 0, status: null, step: 0,
-               time: 0, lastFrameId: 0, field: 'displacement', min: 0, max: 0 };
+               time: 0, lastFrameId: 0, field: 'displacement', min: 0, max: 0, lastErrorAt: -1e9 };
 window.sinewLive = live;  // for tests: frames received, last displacements
 
 function send(msg) {
@@ -104,6 +105,7 @@ function applyFrame(buf) {
   let lo = Infinity, hi = -Infinity;
   for (let i = 0; i < n; ++i) { lo = Math.min(lo, values[i]); hi = Math.max(hi, values[i]); }
   const field = ['displacement', 'von_mises', 'jacobian'][h[2]] || 'displacement';
+  if (document.activeElement !== $('field')) $('field').value = field;  // e.g. after a refusal
   if (field === 'displacement') lo = 0;
   const span = hi > lo ? hi - lo : 1;
   for (let i = 0; i < n; ++i) colour((values[i] - lo) / span, colours, 3 * i);
@@ -122,12 +124,15 @@ function applyFrame(buf) {
 function muscleRow(m) {
   const row = document.createElement('div');
   row.className = 'muscle';
-  row.innerHTML = `<span class="name" title="${m.name}">${m.name}</span>` +
-      `<input type="range" min="0" max="1" step="0.01" value="0"> <span class="v">curve</span> ` +
-      `<button>curve</button>`;
+  row.innerHTML = '<span class="name"></span>' +
+      '<input type="range" min="0" max="1" step="0.01" value="0"> <span class="v">curve</span> ' +
+      '<button>curve</button>';
+  const name = row.querySelector('.name');
+  name.textContent = name.title = m.name;  // the model's name, as text (never markup)
   const [slider, button] = [row.querySelector('input'), row.querySelector('button')];
   slider.dataset.muscle = m.name;
   slider.addEventListener('input', () => {
+    slider.dataset.movedAt = performance.now();
     row.querySelector('.v').textContent = Number(slider.value).toFixed(2);
     send({ type: 'activation', muscle: m.name, value: Number(slider.value) });
   });
@@ -138,22 +143,45 @@ function muscleRow(m) {
   $('muscles').appendChild(row);
 }
 
+// Each muscle row shows the engine's override (status.overrides), so a refused value (above what
+// the time step was planned for) does not stay on the page; not within a second of moving it (the
+// status may predate the move).
+function showOverrides(overrides) {
+  const now = performance.now();
+  for (const slider of document.querySelectorAll('#muscles input')) {
+    if (now - Number(slider.dataset.movedAt || -1e9) < 1000 || !(slider.dataset.muscle in overrides)) continue;
+    const a = overrides[slider.dataset.muscle];
+    slider.parentElement.querySelector('.v').textContent = a === null ? 'curve' : a.toFixed(2);
+    if (a !== null) slider.value = a;
+  }
+}
+
 function showStatus(s) {
   live.status = s;
+  showOverrides(s.overrides);
   const now = performance.now();
   if (now - live.lastRate > 1000) {
     live.fps = (live.frames - live.framesAtLast) * 1000 / (now - live.lastRate);
     live.framesAtLast = live.frames;
     live.lastRate = now;
   }
-  $('status').textContent =
-      `t = ${s.time.toFixed(5)} s  step ${s.step}  ${s.paused ? (s.at_end ? 'end of scene (paused)' : 'paused') : 'running'}` +
+  // In playback the frame shown is the file's, not the engine's (which waits at step 0).
+  const where = s.playback
+    ? `playback: frame ${s.playback.frame + 1} of ${s.playback.frames}, ` +
+      `t = ${hello.playback.times[s.playback.frame].toFixed(5)} s  step ${hello.playback.steps[s.playback.frame]}`
+    : `t = ${s.time.toFixed(5)} s  step ${s.step}  ${s.paused ? (s.at_end ? 'end of scene (paused)' : 'paused') : 'running'}`;
+  $('status').textContent = where +
       `  ${Math.round(s.steps_per_second)} steps/s  ${s.sim_seconds_per_wall_second.toPrecision(3)} sim s / wall s` +
       `  ${live.fps.toFixed(1)} frames/s` + (hello && hello.warnings.length ? `  warnings: ${hello.warnings.join('; ')}` : '');
-  if (!s.playback) $('playback').hidden = true;
+  if (!s.playback) {
+    $('playback').hidden = true;
+    for (const o of $('field').options) o.disabled = false;  // live: every field
+  }
   $('recording').textContent = s.recording ? ` recording to ${s.recording}` : '';
   $('record').textContent = s.recording ? 'Stop recording' : 'Record';
-  $('message').textContent = s.error ? `engine: ${s.error}\n(reset, or lower activations and resume)` : '';
+  // The engine's message while it stands; a refused message's reply stays for 6 s.
+  if (s.error) $('message').textContent = `engine: ${s.error}\n(reset, or lower activations and resume)`;
+  else if (performance.now() - live.lastErrorAt > 6000) $('message').textContent = '';
 }
 
 ws.addEventListener('message', (ev) => {
@@ -166,12 +194,22 @@ ws.addEventListener('message', (ev) => {
   const m = JSON.parse(ev.data);
   if (m.type === 'hello') {
     hello = m;
+    if (!params.has('up') && m.up === 'y') upAxis = 'y';
     $('title').textContent = m.title || m.scene;
     m.muscles.forEach(muscleRow);
     if (m.playback) {
       $('playback').hidden = false;
       $('frame').max = m.playback.times.length - 1;
       $('frame_time').textContent = `t = ${m.playback.times[0].toFixed(4)} s`;
+      for (const o of $('field').options) {  // the element fields the file stores
+        o.disabled = !m.playback.fields.includes(o.value);
+        if (o.disabled) o.title = 'not in the results file (the scene\'s output.fields)';
+      }
+    }
+    if (!m.drag) {  // the server says why (no effect 'loads', or a backend without force slots)
+      $('drag_refusal').textContent = `No dragging here: ${m.drag_refusal}.`;
+      $('drag_refusal').hidden = false;
+      $('radius').disabled = $('stiffness').disabled = true;
     }
     $('radius').value = (m.drag_radius * 1e3).toFixed(1);
     $('radius_value').textContent = ` ${$('radius').value}`;
@@ -183,6 +221,7 @@ ws.addEventListener('message', (ev) => {
   } else if (m.type === 'error') {
     $('message').textContent = `error: ${m.message}`;
     live.lastError = m.message;
+    live.lastErrorAt = performance.now();
   }
 });
 ws.addEventListener('close', () => { $('status').textContent = 'disconnected'; });

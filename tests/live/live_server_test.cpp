@@ -83,7 +83,10 @@ struct Client {
 };
 
 // GET target with optional extra header; the status code.
-int get(unsigned short port, const std::string& target, const std::string& auth = "") {
+// GET target: the status; auth an Authorization header, cookie a Cookie header ("" none);
+// set_cookie receives the reply's Set-Cookie header.
+int get(unsigned short port, const std::string& target, const std::string& auth = "",
+        const std::string& cookie = "", std::string* set_cookie = nullptr) {
   net::io_context ioc;
   tcp::socket s(ioc);
   s.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
@@ -91,10 +94,12 @@ int get(unsigned short port, const std::string& target, const std::string& auth 
   http::request<http::empty_body> req(http::verb::get, target, 11);
   req.set(http::field::host, "127.0.0.1");
   if (!auth.empty()) req.set(http::field::authorization, auth);
+  if (!cookie.empty()) req.set(http::field::cookie, cookie);
   http::write(s, req);
   beast::flat_buffer b;
   http::response<http::string_body> res;
   http::read(s, b, res);
+  if (set_cookie) *set_cookie = std::string(res[http::field::set_cookie]);
   return int(res.result_int());
 }
 
@@ -157,6 +162,7 @@ TEST_F(LiveServer, GreetsAndStreamsFramesOfTheDocumentedSize) {
   const json hello = c.next("hello", 1);
   EXPECT_EQ(hello["muscles"][0]["name"], "flexor");
   EXPECT_TRUE(hello["drag"].get<bool>());
+  EXPECT_EQ(hello["up"], "z");  // the page's camera (sinew-live --up)
   auto [mesh, binary] = c.read();
   ASSERT_TRUE(binary);
   std::uint32_t h[4];
@@ -281,7 +287,14 @@ TEST_F(LiveServer, TokenIsCheckedOnEveryRequest) {
   EXPECT_EQ(get(port_, "/"), 403);
   EXPECT_EQ(get(port_, "/?token=wrong"), 403);
   EXPECT_EQ(get(port_, "/?token=s3cret-tokenX"), 403);
-  EXPECT_EQ(get(port_, "/?token=s3cret-token"), 200);
+  std::string cookie;
+  EXPECT_EQ(get(port_, "/?token=s3cret-token", "", "", &cookie), 200);
+  // The page's own requests (its scripts, three.js) carry the token by the cookie it was given.
+  const std::string name = "sinew_live_" + std::to_string(port_);
+  EXPECT_EQ(cookie, name + "=s3cret-token; Path=/; HttpOnly; SameSite=Strict");
+  EXPECT_EQ(get(port_, "/index.html", "", "a=1; " + name + "=s3cret-token"), 200);
+  EXPECT_EQ(get(port_, "/index.html", "", name + "=s3cret-tokeN"), 403);
+  EXPECT_EQ(get(port_, "/index.html", "", "sinew_live_1=s3cret-token"), 403);  // another port's
   EXPECT_EQ(get(port_, "/index.html", "Bearer s3cret-token"), 200);
   EXPECT_EQ(get(port_, "/index.html", "Bearer nope"), 403);
   EXPECT_THROW(Client c(port_, "/ws"), beast::system_error);

@@ -1,7 +1,7 @@
 // A live session steered step by step (sliders, drags, back to curve) and recorded; the scene it
 // writes, run by sinew-simulate's runner on the same backend and precision, gives the same bits in
 // every recorded frame (displacement, von Mises stress, J). Each backend built; CUDA skips without
-// a device (and, lacking drag forces there, steers the muscle only).
+// a device (and a backend without force slots steers the muscle only).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -11,11 +11,15 @@
 #include <map>
 #include <thread>
 
+#include <hdf5.h>
+#include <nlohmann/json.hpp>
+
 #include "../simulator/sim_io_support.hpp"
 #include "live_support.hpp"
 #include "results_compare.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/formats/model_file.hpp"
 #include "sinew/live/session.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/run_setup.hpp"
@@ -113,6 +117,8 @@ TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
     drag.point = {0.024, 0.004, 0.006};  // the free end's top edge
     drag.force = {0, 0, 0.004};
     drag.radius = 0.0025;
+    // Both backends drag (the CUDA engine uploads its program again between calls).
+    ASSERT_EQ(session.drag_refusal(), "");
     session.submit(drag);
     step(session, 30);
     drag.force = {0, 0.002, 0.006};  // the mouse moves: same nodes, new force
@@ -300,6 +306,39 @@ TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
   std::memcpy(st, session.latest_frame()->data() + 16, 16);
   EXPECT_EQ(std::int64_t(st[0]), recorded.steps()[k]);
   EXPECT_EQ(st[1], recorded.times()[k]);
+  EXPECT_EQ(h[2], std::uint32_t(Field::displacement));
+
+  // Colour by the file's element fields: each skin vertex shows its embedding element's value of
+  // the frame, as the live view does (the model file's embedding of the skin, read here).
+  const auto model = formats::read_model(dir / "live_box.h5");
+  ASSERT_EQ(model.surfaces.size(), 1u);
+  const auto& embedding = model.surfaces[0].embedding_element;
+  const std::size_t nv = embedding.size();
+  ASSERT_EQ(frame_floats(session).size(), 4 * nv);
+  const auto show_field = [&](Field f, const char* dataset) {
+    SCOPED_TRACE(dataset);
+    Command c;
+    c.kind = Command::Kind::field;
+    c.field = f;
+    session.submit(c);
+    ASSERT_TRUE(session.wait_idle(10));
+    std::uint32_t fh[4];
+    std::memcpy(fh, session.latest_frame()->data(), 16);
+    EXPECT_EQ(fh[2], std::uint32_t(f));
+    const auto values = testing::frames_by_step(results, dataset).at(recorded.steps()[k]);
+    const auto floats = frame_floats(session);
+    for (std::size_t v = 0; v < nv; ++v)
+      ASSERT_EQ(floats[3 * nv + v], float(values[std::size_t(embedding[v])])) << "vertex " << v;
+    EXPECT_EQ(std::vector<float>(floats.begin(), floats.begin() + std::ptrdiff_t(3 * nv)),
+              std::vector<float>(shown.begin(), shown.begin() + std::ptrdiff_t(3 * nv)));
+  };
+  show_field(Field::jacobian, "/frames/J");
+  show_field(Field::von_mises, "/frames/von_mises");
+  const auto shown_stress = frame_floats(session);
+  EXPECT_NE(shown_stress, shown);  // the stress colours, not |u|
+  seek(std::int64_t(k) - 1);
+  seek(std::int64_t(k));  // scrubbing keeps the chosen field
+  EXPECT_EQ(frame_floats(session), shown_stress);
 
   // Continue: the scene is replayed to the frame's step; the engine's frame there is the file's.
   Command go;
@@ -321,11 +360,124 @@ TEST_P(LiveSession, PlaybackScrubsAndContinuesFromTheShownFrameExactly) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   EXPECT_EQ(session.step_index(), recorded.steps()[k]);
   EXPECT_TRUE(session.paused());
-  EXPECT_EQ(frame_floats(session), shown);
+  // The engine's own frame there, coloured by its von Mises stress: the file's, bit for bit.
+  EXPECT_EQ(frame_floats(session), shown_stress);
   step(session, 10);  // live from there
   Command seek_now;
   seek_now.kind = Command::Kind::seek;
   EXPECT_THROW(session.submit(seek_now), ProtocolError);  // playback is over
+  session.stop();
+}
+
+TEST_P(LiveSession, PausesAtTheScenesLastStep) {
+  TempDir dir("live_end");
+  auto run = simulator::load_run(case_options(dir, GetParam()), make_live_setup);
+  const std::int64_t end = run.backend->plan().steps;
+  ASSERT_GT(end, 1000);
+  Session session(std::move(run), SessionOptions{});
+  session.start();
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!session.paused() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  ASSERT_TRUE(session.paused());
+  // Exactly where the batch run ends, whatever the chunk of steps in flight.
+  EXPECT_EQ(session.step_index(), end);
+  session.stop();
+}
+
+TEST_P(LiveSession, SpeedCapHoldsWhateverTheChunkOfSteps) {
+  // --speed 0.1 on the block (Δt ≈ 0.2 ms: a chunk of a few dozen steps is ~10 ms of scene time,
+  // more than 0.1 × a frame period): the simulated time stays within the cap plus one chunk.
+  TempDir dir("live_speed");
+  auto run = simulator::load_run(case_options(dir, GetParam()), make_live_setup);
+  const double dt = run.backend->dt() / run.resolved.setup.time_scaling;
+  const double chunk = double(std::max<std::int64_t>(1, run.backend->preferred_step_count())) * dt;
+  SessionOptions so;
+  so.max_speed = 0.1;
+  so.frame_rate = 20;
+  Session session(std::move(run), so);
+  const auto t0 = std::chrono::steady_clock::now();
+  session.start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const double simulated = double(session.step_index()) * dt;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  session.stop();
+  EXPECT_GT(simulated, 0.0);
+  EXPECT_LE(simulated, 0.1 * wall + chunk) << "wall " << wall << " s, chunk " << chunk << " s";
+}
+
+TEST_P(LiveSession, DragIsRefusedWithTheReasonWhenTheSceneHasNoLoads) {
+  TempDir dir("live_no_loads");
+  auto o = case_options(dir, GetParam());
+  auto text = testing::live_scene_text("live_box.h5");
+  const auto at = text.find(", loads]");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 8, "]");
+  o.scene_path = dir / "no_loads.yaml";
+  simulator::testing::write_file(o.scene_path, text);
+  Session session(simulator::load_run(o, make_live_setup), SessionOptions{});
+  const auto hello = nlohmann::json::parse(session.hello_json());
+  EXPECT_FALSE(hello.at("drag").get<bool>());
+  EXPECT_EQ(hello.at("drag_refusal"), "dragging needs the scene's effect 'loads'");
+  Command drag;
+  drag.kind = Command::Kind::drag;
+  drag.point = {0.024, 0.004, 0.006};
+  drag.force = {0, 0, 0.004};
+  drag.radius = 0.0025;
+  try {
+    session.submit(drag);
+    ADD_FAILURE() << "a drag accepted without the effect 'loads'";
+  } catch (const ProtocolError& e) {
+    EXPECT_EQ(std::string(e.what()), "dragging needs the scene's effect 'loads'");
+  }
+  // With 'loads', hello offers dragging exactly where the backend has the force slot.
+  TempDir with("live_loads");
+  Session loads(simulator::load_run(case_options(with, GetParam()), make_live_setup),
+                SessionOptions{});
+  const auto offered = nlohmann::json::parse(loads.hello_json());
+  EXPECT_EQ(offered.at("drag").get<bool>(), offered.at("drag_refusal").is_null());
+  if (GetParam() == "cpu") {
+    EXPECT_TRUE(offered.at("drag").get<bool>());
+  }
+}
+
+TEST(LivePlayback, OffersOnlyTheElementFieldsTheFileStores) {
+  TempDir dir("live_play_fields");
+  const auto o = case_options(dir, "cpu");
+  auto ro = simulator::testing::options_for(o.scene_path, dir / "batch");
+  ro.device = "cpu";
+  simulator::run_scene(ro);
+  // The same file without the stress (as a scene whose output.fields lacks `stress` writes it).
+  const auto results = dir / "no_stress.h5";
+  std::filesystem::copy_file(dir / "batch/results.h5", results);
+  {
+    const hid_t f = H5Fopen(results.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    ASSERT_GE(H5Ldelete(f, "/frames/von_mises", H5P_DEFAULT), 0);
+    H5Fclose(f);
+  }
+  SessionOptions so;
+  so.play = results;
+  Session session(simulator::load_run(o, make_playback_setup), so);
+  const auto hello = nlohmann::json::parse(session.hello_json());
+  EXPECT_EQ(hello.at("playback").at("fields"), nlohmann::json::array({"displacement", "jacobian"}));
+  session.start();
+  Command c;
+  c.kind = Command::Kind::field;
+  c.field = Field::von_mises;
+  try {
+    session.submit(c);
+    ADD_FAILURE() << "von Mises accepted from a file without it";
+  } catch (const ProtocolError& e) {
+    EXPECT_NE(std::string(e.what()).find("/frames/von_mises"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'stress'"), std::string::npos) << e.what();
+  }
+  c.field = Field::jacobian;
+  session.submit(c);
+  ASSERT_TRUE(session.wait_idle(10));
+  std::uint32_t h[4];
+  std::memcpy(h, session.latest_frame()->data(), 16);
+  EXPECT_EQ(h[2], std::uint32_t(Field::jacobian));
   session.stop();
 }
 

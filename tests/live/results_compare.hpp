@@ -14,7 +14,9 @@ inline std::vector<double> read_doubles(const std::string& file, const std::stri
   std::vector<double> v;
   const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (f < 0) return v;
-  const hid_t ds = H5Dopen2(f, name.c_str(), H5P_DEFAULT);
+  // A dataset the file lacks (e.g. /frames/J without the field J) reads as empty, quietly.
+  const hid_t ds =
+      H5Lexists(f, name.c_str(), H5P_DEFAULT) > 0 ? H5Dopen2(f, name.c_str(), H5P_DEFAULT) : -1;
   if (ds >= 0) {
     const hid_t sp = H5Dget_space(ds);
     v.resize(std::size_t(H5Sget_simple_extent_npoints(sp)));

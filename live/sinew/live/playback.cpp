@@ -31,23 +31,50 @@ RecordedRun::RecordedRun(std::string path) : path_(std::move(path)) {
   if (steps_.empty()) throw FormatError(path_, "/frames/step", "the file has no frame");
   if (h5::has_attribute(f, "scene_file"))
     scene_attribute_ = h5::string_attribute(f, "scene_file", path_);
+  for (const char* dataset : {"/frames/von_mises", "/frames/J"}) {
+    if (!h5::exists(f, dataset)) continue;
+    const auto field = h5::shape(f, dataset, path_);
+    if (field.size() != 2 || field[0] < steps_.size())
+      throw FormatError(path_, dataset, "expected a frames × elements dataset");
+    element_fields_.emplace_back(dataset, std::size_t(field[1]));
+  }
 }
 
 std::vector<double> RecordedRun::displacement(std::size_t k) const {
+  return read_frame("/frames/displacement", k, nodes_ * 3);
+}
+
+std::size_t RecordedRun::element_field_width(const std::string& dataset) const {
+  for (const auto& [name, width] : element_fields_)
+    if (name == dataset) return width;
+  return 0;
+}
+
+std::vector<double> RecordedRun::element_field(const std::string& dataset, std::size_t k) const {
+  const auto width = element_field_width(dataset);
+  if (width == 0) throw FormatError(path_, dataset, "the file has no such element field");
+  return read_frame(dataset, k, width);
+}
+
+std::vector<double> RecordedRun::read_frame(const std::string& dataset, std::size_t k,
+                                            std::size_t values) const {
   if (k >= steps_.size())
-    throw FormatError(path_, "/frames/displacement",
+    throw FormatError(path_, dataset,
                       fmt::format("frame {} out of range (the file has {})", k, steps_.size()));
   const auto f = h5::open_checked(path_);
-  const auto ds = h5::open_dataset(f, "/frames/displacement", path_);
-  std::vector<double> u(nodes_ * 3);
-  const hsize_t start[3] = {hsize_t(k), 0, 0}, count[3] = {1, hsize_t(nodes_), 3};
+  const auto ds = h5::open_dataset(f, dataset, path_);
+  std::vector<double> out(values);
   const h5::Handle file_space(H5Dget_space(ds), H5Sclose);
-  const h5::Handle mem_space(H5Screate_simple(3, count, nullptr), H5Sclose);
-  if (H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
-      H5Dread(ds, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, u.data()) < 0)
-    throw FormatError(path_, "/frames/displacement",
-                      fmt::format("cannot read frame {}{}", k, h5::error_detail()));
-  return u;
+  const int rank = H5Sget_simple_extent_ndims(file_space);
+  // One row of the first axis: (1, N, 3) for displacement, (1, E) for an element field.
+  const hsize_t start[3] = {hsize_t(k), 0, 0};
+  const hsize_t count[3] = {1, hsize_t(rank == 3 ? values / 3 : values), 3};
+  const h5::Handle mem_space(H5Screate_simple(rank, count, nullptr), H5Sclose);
+  if (rank < 2 || rank > 3 ||
+      H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
+      H5Dread(ds, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, out.data()) < 0)
+    throw FormatError(path_, dataset, fmt::format("cannot read frame {}{}", k, h5::error_detail()));
+  return out;
 }
 
 std::string RecordedRun::scene() const {

@@ -9,6 +9,7 @@
 // continue from exactly. Same backend and precision as the run that wrote the file.
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sinew::live {
@@ -24,6 +25,12 @@ class RecordedRun {
   std::size_t nodes() const { return nodes_; }
   // u of frame k, N × 3, m. Throws FormatError for k out of range or an unreadable frame.
   std::vector<double> displacement(std::size_t k) const;
+  // An element field the file stores per frame (docs/results-format.md: "/frames/von_mises", Pa,
+  // and "/frames/J", written when the scene's output.fields has `stress` / `J`): its element
+  // count (0 when the file has none), and frame k of it (E values). element_field throws
+  // FormatError for k out of range, a missing dataset or an unreadable frame.
+  std::size_t element_field_width(const std::string& dataset) const;
+  std::vector<double> element_field(const std::string& dataset, std::size_t k) const;
   // The scene to continue with: scene.yaml next to the file when there is one (a live recording's
   // reproducing scene), else the file's scene_file attribute (relative paths: to the current
   // folder, as sinew-simulate was given it).
@@ -34,6 +41,11 @@ class RecordedRun {
   std::vector<double> times_;
   std::vector<std::int64_t> steps_;
   std::size_t nodes_ = 0;
+  // The element fields found at opening: dataset → element count.
+  std::vector<std::pair<std::string, std::size_t>> element_fields_;
+  // Row k of a frames × width (× 3 when vector) dataset of this file, as double.
+  std::vector<double> read_frame(const std::string& dataset, std::size_t k,
+                                 std::size_t values) const;
 };
 
 }  // namespace sinew::live

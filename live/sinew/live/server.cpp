@@ -63,6 +63,20 @@ std::string query_value(std::string_view target, std::string_view key) {
   return {};
 }
 
+// The value of cookie `name` in a Cookie header ("a=1; b=2"), "" when absent.
+std::string cookie_value(std::string_view header, std::string_view name) {
+  while (!header.empty()) {
+    const auto semi = header.find(';');
+    std::string_view kv = header.substr(0, semi);
+    while (!kv.empty() && kv.front() == ' ') kv.remove_prefix(1);
+    if (kv.size() > name.size() && kv.substr(0, name.size()) == name && kv[name.size()] == '=')
+      return std::string(kv.substr(name.size() + 1));
+    if (semi == std::string_view::npos) break;
+    header.remove_prefix(semi + 1);
+  }
+  return {};
+}
+
 }  // namespace
 
 class WsClient;
@@ -75,6 +89,10 @@ struct Server::Impl : std::enable_shared_from_this<Server::Impl> {
   tcp::acceptor acceptor;
   std::vector<std::shared_ptr<WsClient>> clients;  // I/O thread only; front() steers
   std::atomic<std::size_t> client_count{0};
+  // The cookie that carries the token for the page's own requests (its scripts, styles and
+  // three.js, which the URL's ?token= does not reach): named by the port, so two servers on one
+  // host (cookies ignore ports) keep theirs apart. Set once bound.
+  std::string cookie;
 
   void accept();
   void join(const std::shared_ptr<WsClient>& c);
@@ -86,6 +104,10 @@ struct Server::Impl : std::enable_shared_from_this<Server::Impl> {
     const auto auth = req[http::field::authorization];
     if (auth.size() > 7 && auth.substr(0, 7) == "Bearer " &&
         same_token(std::string_view(auth.data() + 7, auth.size() - 7), options.token))
+      return true;
+    const auto header = req[http::field::cookie];
+    if (same_token(cookie_value(std::string_view(header.data(), header.size()), cookie),
+                   options.token))
       return true;
     return same_token(
         query_value(std::string_view(req.target().data(), req.target().size()), "token"),
@@ -302,6 +324,11 @@ class HttpClient : public std::enable_shared_from_this<HttpClient> {
     res->set(http::field::content_type, std::string(content_type(*file)));
     res->set(http::field::cache_control, "no-store");
     res->set("X-Content-Type-Options", "nosniff");
+    // The page's later requests carry the token by this cookie (HttpOnly: no script reads it;
+    // SameSite=Strict: no other site's page sends it).
+    if (!server_->options.token.empty())
+      res->set(http::field::set_cookie, fmt::format("{}={}; Path=/; HttpOnly; SameSite=Strict",
+                                                    server_->cookie, server_->options.token));
     res->keep_alive(request_.keep_alive());
     if (request_.method() == http::verb::get) res->body() = ss.str();
     res->prepare_payload();
@@ -386,6 +413,7 @@ Server::Server(Session& session, ServerOptions options)
   if (!ec) a.bind(ep, ec);
   if (!ec) a.listen(net::socket_base::max_listen_connections, ec);
   if (ec) throw IoError(fmt::format("{}:{}", o.host, o.port), "", "cannot listen: " + ec.message());
+  impl_->cookie = fmt::format("sinew_live_{}", port());
   std::weak_ptr<Impl> weak = impl_;
   session.set_sink([weak](std::shared_ptr<const std::string> msg, bool binary) {
     if (auto s = weak.lock()) net::post(s->ioc, [s, msg, binary] { s->broadcast(msg, binary); });

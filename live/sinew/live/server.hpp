@@ -2,8 +2,9 @@
 // The HTTP + WebSocket endpoint of sinew-live (Boost.Beast over Boost.Asio, one I/O thread;
 // docs/live.md explains the choice). GET serves the page's static files (static_files.hpp);
 // /ws upgrades to the WebSocket of the protocol (protocol.hpp). Every request must carry the
-// access token (?token=… or "Authorization: Bearer …") when one is set: sinew-live sets one for
-// any bind that is not a loopback address.
+// access token (?token=…, "Authorization: Bearer …", or the cookie sinew_live_<port> that every
+// file served sets, so the page's scripts and styles load too) when one is set: sinew-live sets one
+// for any bind that is not a loopback address.
 //
 // Clients: the first connected steers, the others watch (their control messages are refused);
 // when the steering client leaves, the oldest remaining one steers. Each client has its own send

@@ -59,6 +59,15 @@ SurfaceView make_surface_view(const formats::Model& model, const std::string& na
   return v;
 }
 
+// Where a results file stores an element field per frame (docs/results-format.md), and the scene's
+// output.fields entry that writes it.
+const char* results_dataset(Field f) {
+  return f == Field::von_mises ? "/frames/von_mises" : "/frames/J";
+}
+const char* output_field(Field f) {
+  return f == Field::von_mises ? "stress" : "J";
+}
+
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -88,9 +97,21 @@ Session::Session(simulator::LoadedRun run, SessionOptions options)
       throw FormatError(options_.play, "/frames/displacement",
                         fmt::format("{} nodes, but the scene's model has {}", playback_->nodes(),
                                     run_.model.node_count()));
+    json fields = json::array({field_name(Field::displacement)});
+    for (const auto f : {Field::von_mises, Field::jacobian}) {
+      const auto width = playback_->element_field_width(results_dataset(f));
+      if (width == 0) continue;
+      if (width != run_.model.element_count())
+        throw FormatError(options_.play, results_dataset(f),
+                          fmt::format("{} elements, but the scene's model has {}", width,
+                                      run_.model.element_count()));
+      fields.push_back(field_name(f));
+      playback_fields_[std::size_t(f)] = true;
+    }
     playback_hello_ = json({{"file", playback_->path()},
                             {"times", playback_->times()},
-                            {"steps", playback_->steps()}})
+                            {"steps", playback_->steps()},
+                            {"fields", fields}})
                           .dump();
     playing_ = true;
     paused_ = true;
@@ -132,10 +153,12 @@ void Session::submit(const Command& c) {
     throw ProtocolError("playing back a results file: continue from a frame first");
   if (!playing_ && playback_command)
     throw ProtocolError("not playing back a results file (sinew-live --play RESULTS.h5)");
-  if (c.kind == Command::Kind::drag && run_.backend->force_slot_count() == 0)
-    throw ProtocolError(run_.resolved.setup.effects.loads
-                            ? "drag forces are not available on this backend (use --device cpu)"
-                            : "dragging needs the scene's effect 'loads'");
+  // playback_fields_, fixed at construction: playback_ itself goes when the engine continues.
+  if (playing_ && c.kind == Command::Kind::field && !playback_fields_[std::size_t(c.field)])
+    throw ProtocolError(
+        fmt::format("the results file has no {} ({}: the scene's output.fields '{}' writes it)",
+                    field_name(c.field), results_dataset(c.field), output_field(c.field)));
+  if (c.kind == Command::Kind::drag && !drag_refusal().empty()) throw ProtocolError(drag_refusal());
   std::lock_guard lock(mutex_);
   if (queue_.size() >= 4096) throw ProtocolError("too many queued commands: dropped");
   queue_.push_back(c);
@@ -148,6 +171,15 @@ bool Session::wait_idle(double timeout_seconds) {
   const std::uint64_t target = submitted_;
   return idle_.wait_for(lock, std::chrono::duration<double>(timeout_seconds),
                         [&] { return applied_ >= target; });
+}
+
+std::string Session::drag_refusal() const {
+  // The slot exists when the plan asked for one (make_live_setup: effect 'loads') and the backend
+  // has force slots: whichever backend that is, the drag goes through Backend::set_force_slot.
+  if (run_.backend->force_slot_count() > 0) return "";
+  return run_.resolved.setup.effects.loads
+             ? "drag forces are not available on this backend (use --device cpu)"
+             : "dragging needs the scene's effect 'loads'";
 }
 
 std::string Session::last_error() const {
@@ -186,8 +218,10 @@ std::string Session::hello_json() const {
             {"triangles", surface_.triangles.size() / 3},
             {"frame_bytes", kFrameHeaderBytes + 16 * (surface_.rest.size() / 3)},
             {"frame_rate", options_.frame_rate},
+            {"up", options_.up},
             {"muscles", setup.effects.muscles ? muscles : json::array()},
-            {"drag", run_.backend->force_slot_count() > 0},
+            {"drag", drag_refusal().empty()},
+            {"drag_refusal", drag_refusal().empty() ? json(nullptr) : json(drag_refusal())},
             {"drag_radius", options_.drag_radius_default > 0 ? options_.drag_radius_default
                                                              : 3 * run_.model.grid.voxel_size},
             {"warnings", run_.summary.warnings}};
@@ -255,11 +289,11 @@ void Session::apply(const Command& c) {
       break;
     }
     case Command::Kind::drag: {
-      auto nodes = nodes_near(c.point, c.radius);
+      // While a drag is held its nodes stay those picked first; only the force follows the mouse
+      // (so the search, which copies every node's displacement off a GPU, runs once per press).
+      const auto nodes = dragging_ ? log_.drags.back().nodes : nodes_near(c.point, c.radius);
       if (nodes.empty())
         throw ProtocolError(fmt::format("no node within {:.4g} m of the picked point", c.radius));
-      // While a drag is held its nodes stay those picked first; only the force follows the mouse.
-      if (dragging_) nodes = log_.drags.back().nodes;
       // Per node total · (1 / n): exactly how prepare_model spreads the reproducing scene's force.
       const double k = 1.0 / double(nodes.size());
       const std::array<double, 3> per_node{c.force[0] * k, c.force[1] * k, c.force[2] * k};
@@ -304,6 +338,7 @@ void Session::apply(const Command& c) {
       break;
     case Command::Kind::field:
       field_ = c.field;
+      if (playing_) seek(shown_frame_);  // the shown frame in the new colours
       break;
     case Command::Kind::seek:
       seek(std::size_t(c.count));
@@ -380,7 +415,12 @@ void Session::finish_recording() {
 void Session::publish_frame() {
   if (playing_) return;  // playback shows the file's frames (seek), not the engine's
   auto& backend = *run_.backend;
-  publish_surface(backend.displacements(surface_.nodes), backend.step_index(),
+  std::vector<double> values;
+  if (field_ != Field::displacement) {
+    auto fields = backend.element_fields();
+    values = std::move(field_ == Field::von_mises ? fields.von_mises : fields.jacobian);
+  }
+  publish_surface(backend.displacements(surface_.nodes), values, backend.step_index(),
                   backend.time() / run_.resolved.setup.time_scaling);
 }
 
@@ -391,26 +431,28 @@ void Session::seek(std::size_t frame) {
   for (auto n : surface_.nodes)
     for (std::size_t k = 0; k < 3; ++k) sub.push_back(u[3 * std::size_t(n) + k]);
   shown_frame_ = frame;
-  field_ = Field::displacement;  // the file's element fields are not streamed in playback
-  publish_surface(sub, playback_->steps()[frame], playback_->times()[frame]);
+  // submit() lets only the file's fields through; the file's own values, as the live view's.
+  const auto values = field_ == Field::displacement
+                          ? std::vector<double>{}
+                          : playback_->element_field(results_dataset(field_), frame);
+  publish_surface(sub, values, playback_->steps()[frame], playback_->times()[frame]);
 }
 
-void Session::publish_surface(const std::vector<double>& sub, std::int64_t step, double time) {
-  auto& backend = *run_.backend;
+void Session::publish_surface(const std::vector<double>& sub,
+                              const std::vector<double>& element_values, std::int64_t step,
+                              double time) {
   const std::size_t nv = surface_.weights.size();
   std::vector<float> disp(nv * 3), values(nv);
-  simulator::ElementFields fields;
-  if (field_ != Field::displacement) fields = backend.element_fields();
   for (std::size_t v = 0; v < nv; ++v) {
     double d[3] = {0, 0, 0};
     for (const auto& [slot, w] : surface_.weights[v])
       for (std::size_t k = 0; k < 3; ++k) d[k] += w * sub[3 * slot + k];
     for (std::size_t k = 0; k < 3; ++k) disp[3 * v + k] = float(d[k]);
-    const auto e = std::size_t(surface_.element[v]);
-    values[v] = field_ == Field::von_mises ? float(fields.von_mises[e])
-                : field_ == Field::jacobian
-                    ? float(fields.jacobian[e])
-                    : float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    // An element field: the value of the vertex's embedding element (one-point quadrature makes
+    // it constant per element; no smoothing, so the colours show the elements' own values).
+    values[v] = field_ == Field::displacement
+                    ? float(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
+                    : float(element_values[std::size_t(surface_.element[v])]);
   }
   publish(
       std::make_shared<const std::string>(encode_frame(step, time, field_, last_id_, disp, values)),
@@ -471,7 +513,7 @@ void Session::loop() {
   // since pace_wall; restarted whenever the engine was not running.
   auto pace_wall = Clock::now();
   std::int64_t pace_step = backend.step_index();
-  std::int64_t rate_steps = 0;
+  std::int64_t rate_steps = 0, last_frame_step = -1;
   chunk_ = 1;
   if (playing_)
     seek(0);
@@ -519,10 +561,22 @@ void Session::loop() {
       pace_wall = Clock::now();
       pace_step = backend.step_index();
     }
-    if (run) {
+    // Simulated time ahead of max_speed × wall time since pace_wall, in wall seconds (≤ 0: behind).
+    const auto ahead = [&] {
+      return double(backend.step_index() - pace_step) * backend.dt() /
+                 run_.resolved.setup.time_scaling / options_.max_speed -
+             seconds_since(pace_wall);
+    };
+    // Paced: no step while ahead (the wait below is at most a frame period, so a chunk's lead is
+    // waited off over as many turns as it takes).
+    const bool step_now = run && !(options_.max_speed > 0 && pending_steps_ == 0 && ahead() > 0);
+    if (step_now) {
       std::int64_t k = chunk_;
       if (pending_steps_ > 0) k = std::min(k, pending_steps_);
       if (writer_ && next_record_ > n) k = std::min(k, next_record_ - n);
+      // The pause at the scene's end falls on its last step, where the batch run ends.
+      const std::int64_t end = run_.backend->plan().steps;
+      if (options_.pause_at_end && !at_end_ && n < end) k = std::min(k, end - n);
       const auto t0 = Clock::now();
       try {
         backend.step(k);
@@ -536,8 +590,11 @@ void Session::loop() {
         log::warn("live: {}", e.what());
         changed_ = true;
       }
-      const double wall = seconds_since(t0);
+      const auto elapsed = Clock::now() - t0;
+      const double wall = std::chrono::duration<double>(elapsed).count();
       const std::int64_t done = backend.step_index() - n;
+      steps_run_ += done;
+      stepping_ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(elapsed).count();
       pending_steps_ = std::max<std::int64_t>(0, pending_steps_ - done);
       if (pending_steps_ == 0 && paused_) changed_ = true;  // show where stepping stopped
       step_ = backend.step_index();
@@ -556,9 +613,10 @@ void Session::loop() {
       rate_steps = 0;
     }
     const bool frame_due = seconds_since(last_frame) >= frame_period;
-    if (changed_ || (run && frame_due)) {
+    if (changed_ || (frame_due && backend.step_index() != last_frame_step)) {
       publish_frame();
       last_frame = Clock::now();
+      last_frame_step = backend.step_index();
     }
     if (changed_ || seconds_since(last_status) >= 0.25) {
       publish_status();
@@ -566,12 +624,10 @@ void Session::loop() {
     }
     changed_ = false;
     if (run && options_.max_speed > 0) {
-      const double ahead = double(backend.step_index() - pace_step) * backend.dt() /
-                               run_.resolved.setup.time_scaling / options_.max_speed -
-                           seconds_since(pace_wall);
-      if (ahead > 0) {
+      const double lead = ahead();
+      if (lead > 0) {
         std::unique_lock lock(mutex_);
-        wake_.wait_for(lock, std::chrono::duration<double>(std::min(ahead, frame_period)),
+        wake_.wait_for(lock, std::chrono::duration<double>(std::min(lead, frame_period)),
                        [&] { return !queue_.empty() || stop_.load(); });
       }
     }

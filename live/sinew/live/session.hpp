@@ -6,9 +6,10 @@
 // The engine thread owns the backend. Each turn of its loop: apply the queued commands (through
 // the Backend's steering calls, i.e. the BackendCore: never a new plan), write a recorded frame
 // when one falls due, run a chunk of steps sized to ~chunk_seconds of wall time, and publish a
-// frame when 1/frame_rate has passed (or right after a command, so its effect is shown at once).
-// Publishing copies the skin's displacement and hands the encoded frame to the sink; the sink
-// (the server) must not block: a slow client drops frames, the engine never waits for it.
+// frame when 1/frame_rate has passed and it stepped (or right after a command, so its effect is
+// shown at once). Publishing copies the skin's displacement and hands the encoded frame to the
+// sink; the sink (the server) must not block: a slow client drops frames, the engine never waits.
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -51,6 +52,7 @@ struct SessionOptions {
   std::string surface;             // visual surface to stream ("" the first visual one)
   double drag_radius_default = 0;  // m (0: 3 voxels)
   std::string play;                // a results file to scrub through first (playback.hpp)
+  std::string up = "z";            // the model's up axis for the page's camera: "y" or "z"
 };
 
 // What the page needs to draw the model: the streamed surface at rest.
@@ -90,17 +92,26 @@ class Session {
 
   // Test and bench hooks (thread-safe).
   std::int64_t step_index() const { return step_.load(); }
+  // Steps the engine thread has run since start (resets and replays do not lower it), and the
+  // wall time inside those step calls (s): the stepping speed without commands, frames or resets.
+  std::int64_t steps_run() const { return steps_run_.load(); }
+  double stepping_seconds() const { return 1e-9 * double(stepping_ns_.load()); }
   bool paused() const { return paused_.load(); }
   // Blocks until the engine thread has applied every command submitted so far (timeout s).
   bool wait_idle(double timeout_seconds);
   std::string last_error() const;
+  // Why a drag would be refused ("" when dragging works): the scene lacks the effect 'loads', or
+  // the backend has no force slots. Sent in "hello" for the page to say.
+  std::string drag_refusal() const;
 
  private:
   void loop();
   void apply(const Command& c);
   void publish_frame();
-  // Frame from the displacements of surface_.nodes (3 per node, m).
-  void publish_surface(const std::vector<double>& sub, std::int64_t step, double time);
+  // Frame from the displacements of surface_.nodes (3 per node, m) and, when field_ is an element
+  // field, its value per model element (E values).
+  void publish_surface(const std::vector<double>& sub, const std::vector<double>& element_values,
+                       std::int64_t step, double time);
   void seek(std::size_t frame);
   void publish_status();
   // Keeps msg as the latest of its kind (for new clients) and hands it to the sink.
@@ -128,7 +139,7 @@ class Session {
 
   std::thread thread_;
   std::atomic<bool> stop_{false}, paused_{false};
-  std::atomic<std::int64_t> step_{0};
+  std::atomic<std::int64_t> step_{0}, steps_run_{0}, stepping_ns_{0};
   // Engine-thread state.
   std::int64_t pending_steps_ = 0, chunk_ = 1;
   std::uint32_t last_id_ = 0;
@@ -147,6 +158,8 @@ class Session {
   std::atomic<bool> playing_{false};
   std::size_t shown_frame_ = 0;
   std::string playback_hello_;  // the frames' times and steps for "hello" (fixed at start)
+  // The fields the file can colour by, by Field (fixed at start; submit() reads it).
+  std::array<bool, 3> playback_fields_{true, false, false};
 };
 
 }  // namespace sinew::live
