@@ -21,9 +21,15 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   n_ = a.nodes;
   e_ = a.elements;
   interval_ = std::max(1, setup.energy_interval);
-  // Graph batches start at steps ≡ 0 mod 3 (the buffers' rotation); their blow-up tests follow
-  // each step's row flag, so they need no alignment to the energy interval.
-  batch_ = int((std::max(options.graph_steps, 3) + 2) / 3 * 3);
+  {
+    // Batch graphs start at steps ≡ 0 mod lcm(3, interval) with the blow-up tests at fixed slots;
+    // the shorter graphs read each step's flag (cuda_engine.cuh).
+    const std::int64_t lcm = std::lcm<std::int64_t>(3, interval_);
+    batch_reads_flags_ = lcm > 1024;
+    batch_align_ = batch_reads_flags_ ? 3 : lcm;
+    const std::int64_t want = std::max<std::int64_t>(options.graph_steps, batch_align_);
+    batch_ = int((want + batch_align_ - 1) / batch_align_ * batch_align_);
+  }
   const Effects& fx = setup.effects;
   cd_ = physics::central_difference<T>(dt(), fx.damping ? setup.damping_alpha : 0.0);
 

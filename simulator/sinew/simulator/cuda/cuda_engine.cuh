@@ -116,8 +116,9 @@ class CudaEngine final : public Backend, public CudaTiming {
                    std::vector<std::pair<std::string, cudaEvent_t>>* marks = nullptr,
                    bool programmatic = false);
   std::vector<std::pair<std::string, float>> stage_times(int repeats) override;
-  // ahead: the sliding lists refreshed ahead of the steps (slide_ahead_), else inline.
-  cudaGraphExec_t capture_steps(int count, bool ahead);
+  // ahead: the sliding lists refreshed ahead of the steps (slide_ahead_), else inline. reads_flags:
+  // every step reads its energy test flag (else only slots ≡ 0 mod interval_ test, unread).
+  cudaGraphExec_t capture_steps(int count, bool ahead, bool reads_flags);
   void build_graph();
   void destroy_graphs() {
     for (GraphSet* set : {&graphs_, &inline_graphs_}) {
@@ -128,8 +129,8 @@ class CudaEngine final : public Backend, public CudaTiming {
       set->batch = nullptr;
     }
   }
-  // Graphs of batch_ steps and of 3 · 2^j < batch_ steps (the aligned stretches shorter than a
-  // batch between a run's outputs: 72 steps are 48 + 24).
+  // Graphs of batch_ steps and of 3 · 2^j < batch_ steps (the stretches shorter than a batch
+  // between a run's outputs, or up to the next batch_align_ step: 72 steps are 48 + 24).
   struct GraphSet {
     cudaGraphExec_t batch = nullptr;
     std::vector<cudaGraphExec_t> shorter;  // 3 · 2^j steps
@@ -269,9 +270,14 @@ class CudaEngine final : public Backend, public CudaTiming {
             1.0 / core_.dt()};
   }
   // The kinetic-energy blow-up test on the device, at steps ≡ 0 mod energy_interval: each step's
-  // row of scalars ends with its flag (energy_flag_: 1 or 0), so a graph may start at any step
-  // ≡ 0 mod 3 (the three u buffers' rotation).
+  // row of scalars ends with its flag (energy_flag_: 1 or 0). The batch graph starts at steps
+  // ≡ 0 mod batch_align_ = lcm(3, interval) and has its tests at fixed slots (kernels without
+  // the test elsewhere: the step alone as fast as before); the shorter graphs start at any step
+  // ≡ 0 mod 3 (the three u buffers' rotation) and read the flag at every step. An interval whose
+  // lcm with 3 exceeds 1024 reads the flag in the batch graph too (batch_align_ 3).
   int interval_ = 10;
+  std::int64_t batch_align_ = 3;
+  bool batch_reads_flags_ = false;
   std::size_t energy_flag_ = 0;  // index of the flag in a row
   DeviceArray<double> ke_partial_, work_partial_;
   DeviceArray<unsigned> counters_;

@@ -236,14 +236,14 @@ std::vector<std::pair<std::string, float>> CudaEngine<T>::stage_times(int repeat
 // The graph of a batch of `count` steps starting at a step ≡ 0 (mod 3): its scalars (and energy
 // test flags) in slots 0 .. count − 1.
 template <typename T>
-cudaGraphExec_t CudaEngine<T>::capture_steps(int count, bool ahead) {
+cudaGraphExec_t CudaEngine<T>::capture_steps(int count, bool ahead, bool reads_flags) {
   // No other engine's device-wide sync while this stream captures (cuda_check.cuh).
   std::lock_guard lock(capture_mutex());
   cudaGraph_t g = nullptr;
   SINEW_CUDA_CHECK(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal));
   try {
     for (int k = 0; k < count; ++k)
-      launch_step(k, k, stream_, ahead, true, nullptr,
+      launch_step(k, k, stream_, ahead, reads_flags || k % interval_ == 0, nullptr,
                   programmatic_);
   } catch (...) {
     cudaStreamEndCapture(stream_, &g);
@@ -264,8 +264,8 @@ cudaGraphExec_t CudaEngine<T>::capture_steps(int count, bool ahead) {
 template <typename T>
 typename CudaEngine<T>::GraphSet CudaEngine<T>::capture_graph_set(bool ahead) {
   GraphSet set;
-  set.batch = capture_steps(batch_, ahead);
-  for (int len = 3; len < batch_; len *= 2) set.shorter.push_back(capture_steps(len, ahead));
+  set.batch = capture_steps(batch_, ahead, batch_reads_flags_);
+  for (int len = 3; len < batch_; len *= 2) set.shorter.push_back(capture_steps(len, ahead, true));
   return set;
 }
 
@@ -405,17 +405,18 @@ bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, const GraphSet& set) {
     const std::int64_t left = chunk_end - step_;
     int len = 0;  // the longest graph that fits
     cudaGraphExec_t graph = nullptr;
-    if (step_ % 3 == 0) {
-      if (left >= batch_) {
-        len = batch_;
-        graph = set.batch;
-      } else {
-        for (std::size_t j = set.shorter.size(); j-- > 0 && !graph;)
-          if (left >= (std::int64_t(3) << j)) {
-            len = 3 << j;
-            graph = set.shorter[j];
-          }
-      }
+    if (step_ % batch_align_ == 0 && left >= batch_) {
+      len = batch_;
+      graph = set.batch;
+    } else if (step_ % 3 == 0) {
+      // Up to the next step where a batch starts, when a batch fits after it.
+      const std::int64_t next = (step_ / batch_align_ + 1) * batch_align_;
+      const std::int64_t room = chunk_end - next >= batch_ ? std::min(left, next - step_) : left;
+      for (std::size_t j = set.shorter.size(); j-- > 0 && !graph;)
+        if (room >= (std::int64_t(3) << j)) {
+          len = 3 << j;
+          graph = set.shorter[j];
+        }
     }
     if (graph) {
       fill_scalars(step_, len, 0);
@@ -429,7 +430,7 @@ bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, const GraphSet& set) {
       // steps 13% slower), and graphs captured per (phase, length) for these stretches (the
       // 1 mm brow raise's steps 20% slower: about 60 captures; the 0.5 mm one unchanged).
       fill_scalars(step_, 1, int(batch_));
-      launch_step(step_, int(batch_), stream_, false, true);
+      launch_step(step_, int(batch_), stream_, false, step_ % interval_ == 0);
       ++step_;
     }
   }
@@ -447,7 +448,7 @@ StepStatus CudaEngine<T>::read_status() {
 
 template <typename T>
 std::vector<float> CudaEngine<T>::timed_graph_launches(int launches) {
-  while (step_ % 3 != 0) step(1);
+  while (step_ % batch_align_ != 0) step(1);
   cudaEvent_t a, b;
   SINEW_CUDA_CHECK(cudaEventCreate(&a));
   SINEW_CUDA_CHECK(cudaEventCreate(&b));
