@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
     auto& backend = *run.backend;
     const double s = run.resolved.setup.time_scaling, dt = backend.dt();
     fmt::print("scene {}\ndevice {}\nprecision {}\ndt {:.6g} s, {} nodes\n", opt.scene_path,
-               run.summary.device, run.summary.precision, dt, run.model.node_count());
+               run.summary.device, run.summary.precision, dt, run.model->node_count());
 
     // 1. Batch.
     const auto initial = backend.state();
@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
                batch_sps * dt / s);
 
     // 2. + 3. Live with a client.
-    const std::string muscle = run.model.muscles.empty() ? "" : run.model.muscles[0].name;
+    const std::string muscle = run.model->muscles.empty() ? "" : run.model->muscles[0].name;
     live::SessionOptions so;
     so.frame_rate = frame_rate;
     so.pause_at_end = false;  // measure past the scene's duration too

@@ -76,18 +76,18 @@ void make_playback_setup(simulator::Setup& setup) {
 
 Session::Session(simulator::LoadedRun run, SessionOptions options)
     : run_(std::move(run)), options_(std::move(options)) {
-  surface_ = make_surface_view(run_.model, options_.surface);
-  for (const auto& m : run_.model.muscles) muscle_names_.push_back(m.name);
+  surface_ = make_surface_view(*run_.model, options_.surface);
+  for (const auto& m : run_.model->muscles) muscle_names_.push_back(m.name);
   mesh_ = std::make_shared<const std::string>(encode_mesh(surface_.rest, surface_.triangles));
   initial_ = run_.backend->state();
   step_ = run_.backend->step_index();
   paused_ = options_.start_paused;
   if (!options_.play.empty()) {
     playback_ = std::make_unique<RecordedRun>(options_.play);
-    if (playback_->nodes() != run_.model.node_count())
+    if (playback_->nodes() != run_.model->node_count())
       throw FormatError(options_.play, "/frames/displacement",
                         fmt::format("{} nodes, but the scene's model has {}", playback_->nodes(),
-                                    run_.model.node_count()));
+                                    run_.model->node_count()));
     playback_hello_ = json({{"file", playback_->path()},
                             {"times", playback_->times()},
                             {"steps", playback_->steps()}})
@@ -180,7 +180,7 @@ std::string Session::hello_json() const {
             {"dt", run_.backend->dt()},
             {"time_scaling", setup.time_scaling},
             {"duration", run_.scene.duration},
-            {"voxel_size", run_.model.grid.voxel_size},
+            {"voxel_size", run_.model->grid.voxel_size},
             {"surface", surface_.name},
             {"vertices", surface_.rest.size() / 3},
             {"triangles", surface_.triangles.size() / 3},
@@ -189,7 +189,7 @@ std::string Session::hello_json() const {
             {"muscles", setup.effects.muscles ? muscles : json::array()},
             {"drag", run_.backend->force_slot_count() > 0},
             {"drag_radius", options_.drag_radius_default > 0 ? options_.drag_radius_default
-                                                             : 3 * run_.model.grid.voxel_size},
+                                                             : 3 * run_.model->grid.voxel_size},
             {"warnings", run_.summary.warnings}};
   if (playing_) j["playback"] = json::parse(playback_hello_);
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
@@ -198,7 +198,7 @@ std::string Session::hello_json() const {
 std::vector<formats::Index> Session::nodes_near(const std::array<double, 3>& point, double radius) {
   // Current positions: rest + u(n); the picked point is on the deformed skin.
   const auto u = run_.backend->displacements();
-  const auto& model = run_.model;
+  const auto& model = *run_.model;
   std::vector<formats::Index> out;
   const double r2 = radius * radius;
   for (std::size_t i = 0; i < model.node_count(); ++i) {
@@ -331,7 +331,7 @@ void Session::start_recording(const std::string& dir) {
   if (ec) throw IoError(dir, "", "cannot create the recording folder: " + ec.message());
   const auto& r = run_.resolved;
   writer_ = std::make_unique<simulator::ResultsWriter>(
-      dir, run_.model, simulator::results_options(run_.scene, run_.summary.scene_file));
+      dir, *run_.model, simulator::results_options(run_.scene, run_.summary.scene_file));
   record_dir_ = dir;
   schedule_.emplace(r.output_interval, r.setup.time_scaling, run_.backend->dt(),
                     std::numeric_limits<std::int64_t>::max(), false);

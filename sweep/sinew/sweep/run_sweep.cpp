@@ -71,7 +71,8 @@ bool run_is_finished(const SweepOptions& options, const PlannedRun& run) {
          is_finished_status(summary_status(dir));
 }
 
-Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options) {
+Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options,
+                simulator::ModelCache* models) {
   const log::ScopedContext context(run.name);  // the runner's messages name the run
   const fs::path dir = run_directory(options, run);
   const auto scene_path = (dir / "scene.yaml").string();
@@ -90,6 +91,7 @@ Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& o
   ro.cuda_device = options.cuda_device;
   ro.quiet = true;
   ro.force = options.settings.force;
+  ro.models = models;
   std::string failure;
   try {
     // An interrupted attempt of this very run (a SIGTERM, or mpirun ending the job when another
@@ -194,11 +196,12 @@ SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options) {
   double last_table = now_s();
   std::atomic<std::size_t> next{0};
   std::exception_ptr table_error;
+  simulator::ModelCache models;
   const auto worker = [&] {
     for (std::size_t k = next++; k < pending.size() && !simulator::interrupt_requested();
          k = next++) {
       const auto& run = sweep.runs[pending[k]];
-      Row row = execute_run(sweep, run, options);
+      Row row = execute_run(sweep, run, options, &models);
       std::lock_guard lock(mutex);
       report.rows[pending[k]] = std::move(row);
       ++report.ran;

@@ -14,12 +14,15 @@
 // (on one GPU, each CUDA engine has its own streams, so small models share the GPU). The runner's
 // libraries are safe for this: the logger is spdlog's thread-safe one; every HDF5 call goes
 // through formats' one lock (hdf5_file.hpp), so any HDF5 build works, thread-safe or not, and the
-// runs' HDF5 I/O does not overlap; the interrupt flag is atomic.
+// runs' HDF5 I/O does not overlap; the interrupt flag is atomic. Each model file is read once per
+// process and shared by the runs that use it (simulator::ModelCache): the runs' set-ups do not
+// queue behind one another's model reads.
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "sinew/simulator/model_cache.hpp"
 #include "sinew/sweep/sweep_file.hpp"
 #include "sinew/sweep/table.hpp"
 
@@ -43,8 +46,10 @@ std::string run_directory(const SweepOptions& options, const PlannedRun& run);
 // True when the run's folder holds this run's scene and a summary with a terminal status.
 bool run_is_finished(const SweepOptions& options, const PlannedRun& run);
 // Runs one run (after clearing what an unfinished attempt left in its folder) and returns its
-// row. Never throws for the run's own failures: they are its row's status and message.
-Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options);
+// row. Never throws for the run's own failures: they are its row's status and message. `models`,
+// when given, is where the run reads its model file: once per process for all runs that share it.
+Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options,
+                simulator::ModelCache* models = nullptr);
 
 // Counts finished and failed runs and prints the progress line with the ETA.
 class SweepProgress {
