@@ -34,21 +34,27 @@ class DeviceArray {
     n_ = n;
     if (n) SINEW_CUDA_CHECK(cudaMalloc(&p_, n * sizeof(V)));
   }
-  // Setup-time transfers on the legacy stream, completed before returning (the engine's work runs
-  // on a non-blocking stream that does not order itself after the legacy stream).
-  void upload(const std::vector<V>& v) {
+  // Transfers in the order of `stream` (the engine's step stream), completed before returning.
+  // Only that stream is waited for: a device-wide synchronisation would also wait for the graphs
+  // that engines of other host threads (sinew-sweep --concurrent) have queued, and stall their
+  // queues meanwhile.
+  void upload(const std::vector<V>& v, cudaStream_t stream) {
     allocate(v.size());
-    if (n_) SINEW_CUDA_CHECK(cudaMemcpy(p_, v.data(), n_ * sizeof(V), cudaMemcpyHostToDevice));
-    device_synchronize();
+    if (n_)
+      SINEW_CUDA_CHECK(
+          cudaMemcpyAsync(p_, v.data(), n_ * sizeof(V), cudaMemcpyHostToDevice, stream));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream));
   }
-  void zero() {
-    if (n_) SINEW_CUDA_CHECK(cudaMemset(p_, 0, n_ * sizeof(V)));
-    device_synchronize();
+  void zero(cudaStream_t stream) {
+    if (n_) SINEW_CUDA_CHECK(cudaMemsetAsync(p_, 0, n_ * sizeof(V), stream));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream));
   }
-  std::vector<V> download() const {
-    device_synchronize();
+  std::vector<V> download(cudaStream_t stream) const {
     std::vector<V> v(n_);
-    if (n_) SINEW_CUDA_CHECK(cudaMemcpy(v.data(), p_, n_ * sizeof(V), cudaMemcpyDeviceToHost));
+    if (n_)
+      SINEW_CUDA_CHECK(
+          cudaMemcpyAsync(v.data(), p_, n_ * sizeof(V), cudaMemcpyDeviceToHost, stream));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream));
     return v;
   }
   V* get() const { return p_; }
