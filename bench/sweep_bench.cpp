@@ -13,9 +13,11 @@
 //
 //   sweep_bench --scene SCENE --model MODEL [--device cuda|cpu] [--concurrent 1,16,64]
 //               [--duration S] [--precision float|double] [--out DIR] [--keep-outputs]
+//               [--gpu-wait auto|spin|block]
 //
 // The runs write only their first and last frame (displacements) and no probe rows unless
-// --keep-outputs: the figure is the engines', not the writers'. The runs are the same scene with a
+// --keep-outputs: the figure is the engines', not the writers'. --gpu-wait: how the runs' threads
+// wait for the GPU (SweepOptions::gpu_wait; auto: asleep when K is above the cores). The runs are the same scene with a
 // different title each (`list: [{title: run 0}, ...]`), so each does the whole work.
 #include <algorithm>
 #include <chrono>
@@ -43,6 +45,7 @@ namespace {
 
 struct Options {
   std::string scene, model, device = "cuda", precision, out = "sweep_bench_results";
+  std::string gpu_wait = "auto";
   std::vector<int> concurrent{1, 16, 64};
   double duration = 0;
   bool keep_outputs = false;
@@ -168,11 +171,15 @@ int main(int argc, char** argv) try {
       o.out = value();
     else if (a == "--keep-outputs")
       o.keep_outputs = true;
+    else if (a == "--gpu-wait")
+      o.gpu_wait = value();
     else
       throw std::invalid_argument("unknown argument " + a + " (see the header of sweep_bench.cpp)");
   }
   if (o.scene.empty() || o.model.empty())
     throw std::invalid_argument("--scene and --model are needed");
+  if (o.gpu_wait != "auto" && o.gpu_wait != "spin" && o.gpu_wait != "block")
+    throw std::invalid_argument("--gpu-wait takes auto, spin or block, got '" + o.gpu_wait + "'");
 
   const auto model = formats::read_model(o.model);
   const double elements = double(model.element_count());
@@ -233,6 +240,7 @@ int main(int argc, char** argv) try {
     so.settings.concurrent = k;
     if (!o.precision.empty()) so.settings.precision = o.precision;
     so.quiet = true;
+    so.gpu_wait = o.gpu_wait;
     const auto t0 = std::chrono::steady_clock::now();
     const auto report = sweep::run_sweep(sweep, so);
     const double wall =

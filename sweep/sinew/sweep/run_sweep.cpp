@@ -17,6 +17,7 @@
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/run_summary.hpp"
 #include "sinew/simulator/runner.hpp"
 
@@ -186,8 +187,17 @@ std::vector<std::size_t> start_sweep(const Sweep& sweep, const SweepOptions& opt
   return pending;
 }
 
+void choose_gpu_wait(const SweepOptions& options) {
+  if (options.settings.device == "cpu" || !simulator::cuda_device_available()) return;
+  const int cores = std::max(1, omp_get_num_procs() / std::max(1, options.ranks_on_machine));
+  const bool block = options.gpu_wait == "block" ||
+                     (options.gpu_wait == "auto" && options.settings.concurrent > cores);
+  simulator::set_cuda_blocking_wait(options.cuda_device, block);
+}
+
 SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options) {
   const int concurrent = std::max(1, options.settings.concurrent);
+  choose_gpu_wait(options);
   SweepReport report;
   const auto pending = start_sweep(sweep, options, report);
 

@@ -36,7 +36,15 @@ struct SweepOptions {
   // Share of the machine's cores for this process's runs (MPI: several ranks on one machine);
   // threads per run default to cores / (ranks_on_machine × concurrent), at least 1.
   int ranks_on_machine = 1;
+  // How the runs' threads wait for the GPU (simulator::set_cuda_blocking_wait): "auto" asleep when
+  // more runs are at once than this process has cores (spinning waits would starve the threads
+  // that launch), spinning otherwise; "block", "spin" (sweep_bench compares them).
+  std::string gpu_wait = "auto";
 };
+
+// Sets how this process's threads wait for its GPU for `options` (gpu_wait): when its runs may
+// use CUDA and a device is there; nothing otherwise.
+void choose_gpu_wait(const SweepOptions& options);
 
 // Terminal statuses: a run with one of these in its summary is finished.
 bool is_finished_status(const std::string& status);

@@ -91,6 +91,7 @@ SweepReport manage(const Sweep& sweep, const SweepOptions& options, int workers)
 }
 
 SweepReport work(const Sweep& sweep, const SweepOptions& options) {
+  choose_gpu_wait(options);
   SweepReport report;
   const std::size_t slots = std::size_t(std::max(1, options.settings.concurrent));
   simulator::ModelCache models;  // each model file read once by this rank (outlives the runs)

@@ -24,6 +24,13 @@ bool cuda_device_available() {
   return cuda_device_count() > 0;
 }
 
+void set_cuda_blocking_wait(int device, bool blocking) {
+  // On a device already in use the primary context's flags are replaced (CUDA 11 and later).
+  SINEW_CUDA_CHECK(cudaSetDevice(device));
+  SINEW_CUDA_CHECK(
+      cudaSetDeviceFlags(blocking ? cudaDeviceScheduleBlockingSync : cudaDeviceScheduleAuto));
+}
+
 namespace detail {
 bool cuda_device_properties(CudaDeviceProperties& out) {
   if (!cuda_device_available()) return false;
