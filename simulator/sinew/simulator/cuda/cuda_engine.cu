@@ -215,6 +215,11 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
 
 template <typename T>
 CudaEngine<T>::~CudaEngine() {
+  // The arrays are freed after this body, without waiting for the device (DeviceArray): nothing of
+  // this engine may still run then.
+  for (cudaStream_t st : {stream_, copy_stream_, slide_stream_})
+    if (st) cudaStreamSynchronize(st);
+  for (cudaStream_t st : side_streams_) cudaStreamSynchronize(st);
   if (graph_) cudaGraphExecDestroy(graph_);
   if (short_graph_) cudaGraphExecDestroy(short_graph_);
   if (copy_ready_) cudaEventDestroy(copy_ready_);

@@ -1,5 +1,6 @@
 #pragma once
-// Device and pinned host arrays of the CUDA engine (RAII over cudaMalloc / cudaMallocHost).
+// Device and pinned host arrays of the CUDA engine (RAII over CUDA's stream-ordered allocator, or
+// cudaMalloc where a device has none, and cudaMallocHost).
 #include <cuda_runtime.h>
 
 #include <cstddef>
@@ -9,6 +10,23 @@
 #include "sinew/simulator/cuda/cuda_check.cuh"
 
 namespace sinew::simulator::cuda {
+
+// Whether the current device has CUDA's stream-ordered allocator (cudaMallocAsync, cudaFreeAsync:
+// CUDA 11.2 and later, most devices). cudaFree waits for the whole device, that is for the graphs
+// every engine of the process has queued; cudaFreeAsync waits for nothing.
+inline bool stream_ordered_allocator() {
+  static const bool yes = [] {
+    int device = 0, supported = 0;
+    if (cudaGetDevice(&device) != cudaSuccess ||
+        cudaDeviceGetAttribute(&supported, cudaDevAttrMemoryPoolsSupported, device) !=
+            cudaSuccess) {
+      cudaGetLastError();
+      return false;
+    }
+    return supported != 0;
+  }();
+  return yes;
+}
 
 template <typename V>
 class DeviceArray {
@@ -25,14 +43,26 @@ class DeviceArray {
     std::swap(n_, o.n_);
     return *this;
   }
+  // Freed on the legacy stream, which orders itself after none of the engines' non-blocking
+  // streams: whoever frees or reallocates makes sure no queued work still uses the array (the
+  // engine synchronises its streams first).
   ~DeviceArray() {
-    if (p_) cudaFree(p_);
+    if (p_) stream_ordered_allocator() ? cudaFreeAsync(p_, cudaStreamLegacy) : cudaFree(p_);
   }
   void allocate(std::size_t n) {
-    if (p_) SINEW_CUDA_CHECK(cudaFree(p_));
+    if (p_)
+      SINEW_CUDA_CHECK(stream_ordered_allocator() ? cudaFreeAsync(p_, cudaStreamLegacy)
+                                                  : cudaFree(p_));
     p_ = nullptr;
     n_ = n;
-    if (n) SINEW_CUDA_CHECK(cudaMalloc(&p_, n * sizeof(V)));
+    if (!n) return;
+    if (!stream_ordered_allocator()) {
+      SINEW_CUDA_CHECK(cudaMalloc(&p_, n * sizeof(V)));
+      return;
+    }
+    SINEW_CUDA_CHECK(cudaMallocAsync(&p_, n * sizeof(V), cudaStreamLegacy));
+    // Usable on every stream from here (the legacy stream holds nothing else of the engines').
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(cudaStreamLegacy));
   }
   // Transfers in the order of `stream` (the engine's step stream), completed before returning.
   // Only that stream is waited for: a device-wide synchronisation would also wait for the graphs
