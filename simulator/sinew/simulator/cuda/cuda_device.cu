@@ -27,8 +27,11 @@ bool cuda_device_available() {
 void set_cuda_blocking_wait(int device, bool blocking) {
   // On a device already in use the primary context's flags are replaced (CUDA 11 and later).
   SINEW_CUDA_CHECK(cudaSetDevice(device));
-  SINEW_CUDA_CHECK(
-      cudaSetDeviceFlags(blocking ? cudaDeviceScheduleBlockingSync : cudaDeviceScheduleAuto));
+  unsigned flags = 0;
+  SINEW_CUDA_CHECK(cudaGetDeviceFlags(&flags));
+  flags = (flags & ~unsigned(cudaDeviceScheduleMask)) |
+          (blocking ? cudaDeviceScheduleBlockingSync : cudaDeviceScheduleAuto);
+  SINEW_CUDA_CHECK(cudaSetDeviceFlags(flags));
 }
 
 namespace detail {
