@@ -29,7 +29,9 @@ void set_cuda_blocking_wait(int device, bool blocking) {
   SINEW_CUDA_CHECK(cudaSetDevice(device));
   unsigned flags = 0;
   SINEW_CUDA_CHECK(cudaGetDeviceFlags(&flags));
-  flags = (flags & ~unsigned(cudaDeviceScheduleMask)) |
+  // The other flags kept, but cudaDeviceMapHost, which the getter may report and the setter does
+  // not take (it is implicit).
+  flags = (flags & ~unsigned(cudaDeviceScheduleMask | cudaDeviceMapHost)) |
           (blocking ? cudaDeviceScheduleBlockingSync : cudaDeviceScheduleAuto);
   SINEW_CUDA_CHECK(cudaSetDeviceFlags(flags));
 }
