@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
     const std::int64_t scene_steps = backend.plan().steps;
     fmt::print(
         "scene {}\ndevice {}\nprecision {}\ndt {:.6g} s, {} nodes, {} steps per scene ({} s)\n",
-        opt.scene_path, run.summary.device, run.summary.precision, dt, run.model.node_count(),
+        opt.scene_path, run.summary.device, run.summary.precision, dt, run.model->node_count(),
         scene_steps, duration);
 
     // 1. Batch, looping over the scene.
@@ -123,7 +123,7 @@ int main(int argc, char** argv) {
                batch_sps * dt / s, batch_loops);
 
     // 2. + 3. Live with a client.
-    const std::string muscle = run.model.muscles.empty() ? "" : run.model.muscles[0].name;
+    const std::string muscle = run.model->muscles.empty() ? "" : run.model->muscles[0].name;
     const auto& curves = run.resolved.setup.activation;
     const double peak = !curves.empty() && !curves[0].points.empty()
                             ? std::clamp(curves[0].max_value(), 0.0, 1.0)

@@ -103,7 +103,7 @@ TEST_P(LiveSession, RecordedSessionIsReproducedBitForBit) {
     o.precision = std::string(precision) == "float" ? simulator::Precision::float32
                                                     : simulator::Precision::float64;
     auto run = simulator::load_run(o, make_live_setup);
-    const auto n_nodes = run.model.node_count();
+    const auto n_nodes = run.model->node_count();
     SessionOptions so;
     so.start_paused = true;
     so.record_dir = dir / (std::string("rec_") + precision);

@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -402,6 +405,78 @@ TEST(CudaBackend, InternalForcesAndReactionsMatchTheCpu) {
   for (int d = 0; d < 3; ++d)
     EXPECT_NEAR(rg[std::size_t(d)], rc[std::size_t(d)],
                 1e-9 * (std::abs(rc[std::size_t(d)]) + 1e-12));
+}
+
+// Probe rows ask for several node lists in turn; the engine keeps each uploaded (up to 8, then
+// replaces one): every answer is the nodes' own displacements, before and after replacements.
+TEST(CudaBackend, NodeListsAskedInTurnGiveThoseNodesDisplacements) {
+  SKIP_WITHOUT_GPU();
+  const Scene s = muscle_sliding_scene(Precision::float32);
+  auto gpu = make_cuda_backend(s.model, s.setup);
+  gpu->step(150);
+  const auto all = gpu->displacements();
+  ASSERT_GT(max_abs(all), 0.0);
+  const auto n = Index(s.model.node_count());
+  for (int round = 0; round < 3; ++round)
+    for (Index k = 0; k < 11; ++k) {  // 11 lists: more than the engine keeps
+      const std::vector<Index> nodes{k, Index((7 * k + 3) % n), Index(n - 1 - k)};
+      const auto got = gpu->displacements(nodes);
+      ASSERT_EQ(got.size(), 9u);
+      for (std::size_t i = 0; i < nodes.size(); ++i)
+        for (std::size_t d = 0; d < 3; ++d)
+          EXPECT_EQ(got[3 * i + d], all[3 * std::size_t(nodes[i]) + d])
+              << "round " << round << ", list " << k << ", node " << nodes[i];
+    }
+  // The reaction set's list between them, as a run's probe rows ask.
+  const auto r0 = gpu->reaction(s.setup.rigid_nodes);
+  gpu->displacements({0, 1});
+  EXPECT_EQ(gpu->reaction(s.setup.rigid_nodes), r0);
+}
+
+// Engines in threads of one process (sinew-sweep --concurrent) share the device and wait only for
+// their own streams: each gives the bits of an engine alone, frames and probe queries included.
+TEST(CudaBackend, EnginesInThreadsGiveTheBitsOfOneAlone) {
+  SKIP_WITHOUT_GPU();
+  const Scene s = muscle_sliding_scene(Precision::float32);
+  const std::vector<Index> probe{0, 5, 17};
+  const auto run = [&](std::vector<double>& u, std::vector<double>& picked, double& strain,
+                       std::array<double, 3>& reaction) {
+    auto gpu = make_cuda_backend(s.model, s.setup);
+    for (int k = 0; k < 6; ++k) {  // steps between "probe rows" and "frames", as the runner does
+      gpu->step(97);
+      picked = gpu->displacements(probe);
+      reaction = gpu->reaction(s.setup.rigid_nodes);
+      if (k % 2) strain = gpu->frame(false).energies.strain;
+    }
+    u = gpu->displacements();
+  };
+  std::vector<double> u0, p0;
+  double e0 = 0;
+  std::array<double, 3> r0{};
+  run(u0, p0, e0, r0);
+  constexpr int kThreads = 4;
+  std::vector<std::vector<double>> u(kThreads), p(kThreads);
+  std::vector<double> e(kThreads);
+  std::vector<std::array<double, 3>> r(kThreads);
+  std::vector<std::exception_ptr> errors(kThreads);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t)
+    threads.emplace_back([&, t] {
+      try {
+        run(u[std::size_t(t)], p[std::size_t(t)], e[std::size_t(t)], r[std::size_t(t)]);
+      } catch (...) {
+        errors[std::size_t(t)] = std::current_exception();
+      }
+    });
+  for (auto& th : threads) th.join();
+  for (int t = 0; t < kThreads; ++t) {
+    if (errors[std::size_t(t)]) std::rethrow_exception(errors[std::size_t(t)]);
+    EXPECT_EQ(u[std::size_t(t)], u0) << "thread " << t;
+    EXPECT_EQ(p[std::size_t(t)], p0) << "thread " << t;
+    EXPECT_EQ(e[std::size_t(t)], e0) << "thread " << t;
+    EXPECT_EQ(r[std::size_t(t)], r0) << "thread " << t;
+  }
+  ASSERT_GT(max_abs(u0), 0.0);
 }
 
 TEST(CudaBackend, BenchmarkModelsHaveTable2Sizes) {

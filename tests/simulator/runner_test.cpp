@@ -179,6 +179,41 @@ TEST(Runner, ResumedCudaRunIsBitIdentical) {
   EXPECT_EQ(read_file(dir / "full/probe_wall.csv"), read_file(dir / "cut/probe_wall.csv"));
 }
 
+// A run that takes its model from a ModelCache (sinew-sweep) is the run sinew-simulate makes: the
+// same files bit for bit, and its checkpoint's digest is the one an uncached run computes, so each
+// resumes the other's checkpoint.
+TEST(Runner, ARunThroughTheModelCacheIsTheSameRun) {
+  TempDir dir("model_cache_run");
+  const std::string scene = write_muscle_scene(dir);
+  const auto plain = run_scene(options_for(scene, dir / "plain"));
+  ASSERT_EQ(plain.summary.status, "completed");
+
+  ModelCache models;
+  auto first = options_for(scene, dir / "cached");
+  first.models = &models;
+  first.stop_at_step = 37;
+  EXPECT_EQ(run_scene(first).summary.status, "interrupted");
+  auto second = options_for(scene, dir / "cached");  // no cache: the digest from the file
+  second.restart = dir / "cached/checkpoint.h5";
+  const auto resumed = run_scene(second);
+  EXPECT_EQ(resumed.summary.status, "completed");
+  EXPECT_EQ(resumed.summary.restart_step, 37);
+
+  auto whole = options_for(scene, dir / "whole");
+  whole.models = &models;
+  EXPECT_EQ(run_scene(whole).summary.steps_done, plain.summary.steps_done);
+  for (const char* out : {"cached", "whole"}) {
+    const auto got = datasets(dir / (std::string(out) + "/results.h5"));
+    const auto want = datasets(dir / "plain/results.h5");
+    ASSERT_EQ(got.size(), want.size()) << out;
+    for (const auto& [name, bytes] : want)
+      EXPECT_TRUE(got.count(name) && bytes == got.at(name)) << out << ": " << name;
+    EXPECT_EQ(read_file(dir / (std::string(out) + "/probe_wall.csv")),
+              read_file(dir / "plain/probe_wall.csv"))
+        << out;
+  }
+}
+
 TEST(Runner, RestartRefusesAnotherScene) {
   TempDir dir("restart_digest");
   const std::string scene = write_muscle_scene(dir);

@@ -85,26 +85,26 @@ void make_playback_setup(simulator::Setup& setup) {
 
 Session::Session(simulator::LoadedRun run, SessionOptions options)
     : run_(std::move(run)), options_(std::move(options)) {
-  surface_ = make_surface_view(run_.model, options_.surface);
-  for (const auto& m : run_.model.muscles) muscle_names_.push_back(m.name);
+  surface_ = make_surface_view(*run_.model, options_.surface);
+  for (const auto& m : run_.model->muscles) muscle_names_.push_back(m.name);
   mesh_ = std::make_shared<const std::string>(encode_mesh(surface_.rest, surface_.triangles));
   initial_ = run_.backend->state();
   step_ = run_.backend->step_index();
   paused_ = options_.start_paused;
   if (!options_.play.empty()) {
     playback_ = std::make_unique<RecordedRun>(options_.play);
-    if (playback_->nodes() != run_.model.node_count())
+    if (playback_->nodes() != run_.model->node_count())
       throw FormatError(options_.play, "/frames/displacement",
                         fmt::format("{} nodes, but the scene's model has {}", playback_->nodes(),
-                                    run_.model.node_count()));
+                                    run_.model->node_count()));
     json fields = json::array({field_name(Field::displacement)});
     for (const auto f : {Field::von_mises, Field::jacobian}) {
       const auto width = playback_->element_field_width(results_dataset(f));
       if (width == 0) continue;
-      if (width != run_.model.element_count())
+      if (width != run_.model->element_count())
         throw FormatError(options_.play, results_dataset(f),
                           fmt::format("{} elements, but the scene's model has {}", width,
-                                      run_.model.element_count()));
+                                      run_.model->element_count()));
       fields.push_back(field_name(f));
       playback_fields_[std::size_t(f)] = true;
     }
@@ -212,7 +212,7 @@ std::string Session::hello_json() const {
             {"dt", run_.backend->dt()},
             {"time_scaling", setup.time_scaling},
             {"duration", run_.scene.duration},
-            {"voxel_size", run_.model.grid.voxel_size},
+            {"voxel_size", run_.model->grid.voxel_size},
             {"surface", surface_.name},
             {"vertices", surface_.rest.size() / 3},
             {"triangles", surface_.triangles.size() / 3},
@@ -223,7 +223,7 @@ std::string Session::hello_json() const {
             {"drag", drag_refusal().empty()},
             {"drag_refusal", drag_refusal().empty() ? json(nullptr) : json(drag_refusal())},
             {"drag_radius", options_.drag_radius_default > 0 ? options_.drag_radius_default
-                                                             : 3 * run_.model.grid.voxel_size},
+                                                             : 3 * run_.model->grid.voxel_size},
             {"warnings", run_.summary.warnings}};
   if (playing_) j["playback"] = json::parse(playback_hello_);
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
@@ -232,7 +232,7 @@ std::string Session::hello_json() const {
 std::vector<formats::Index> Session::nodes_near(const std::array<double, 3>& point, double radius) {
   // Current positions: rest + u(n); the picked point is on the deformed skin.
   const auto u = run_.backend->displacements();
-  const auto& model = run_.model;
+  const auto& model = *run_.model;
   std::vector<formats::Index> out;
   const double r2 = radius * radius;
   for (std::size_t i = 0; i < model.node_count(); ++i) {
@@ -366,7 +366,7 @@ void Session::start_recording(const std::string& dir) {
   if (ec) throw IoError(dir, "", "cannot create the recording folder: " + ec.message());
   const auto& r = run_.resolved;
   writer_ = std::make_unique<simulator::ResultsWriter>(
-      dir, run_.model, simulator::results_options(run_.scene, run_.summary.scene_file));
+      dir, *run_.model, simulator::results_options(run_.scene, run_.summary.scene_file));
   record_dir_ = dir;
   schedule_.emplace(r.output_interval, r.setup.time_scaling, run_.backend->dt(),
                     std::numeric_limits<std::int64_t>::max(), false);

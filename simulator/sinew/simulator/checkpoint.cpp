@@ -16,11 +16,16 @@ namespace h5 = formats::hdf5;
 
 std::string run_digest(const std::string& scene_text, const std::string& model_path,
                        const std::string& precision) {
+  return run_digest_from_hash(scene_text, formats::sha256_file(model_path), precision);
+}
+
+std::string run_digest_from_hash(const std::string& scene_text, const std::string& model_sha256,
+                                 const std::string& precision) {
   formats::Sha256 h;
   h.update("scene\n");
   h.update(scene_text);
   h.update("\nmodel\n");
-  h.update(formats::sha256_file(model_path));
+  h.update(model_sha256);
   h.update("\nprecision\n");
   h.update(precision);
   return h.hex_digest();

@@ -30,6 +30,9 @@ struct Checkpoint {
 // is refused when any of them differs.
 std::string run_digest(const std::string& scene_text, const std::string& model_path,
                        const std::string& precision);
+// The same digest from the model file's SHA-256 (hex) already computed (ModelCache).
+std::string run_digest_from_hash(const std::string& scene_text, const std::string& model_sha256,
+                                 const std::string& precision);
 
 // Writes atomically (temporary file + rename). Throws IoError.
 void write_checkpoint(const std::string& path, const Checkpoint& checkpoint);

@@ -60,6 +60,8 @@ std::unique_ptr<Backend> make_cuda_backend(const formats::Model&, const Setup&,
 double measure_copy_bandwidth(std::size_t, int) {
   throw ConfigError("", "device", "sinew was built without CUDA");
 }
+
+void set_cuda_blocking_wait(int, bool) {}
 #endif
 
 }  // namespace sinew::simulator

@@ -62,6 +62,14 @@ int cuda_device_count();
 // "NVIDIA H200 (sm_90, 132 SMs, 139.8 GiB)" or "" without a device.
 std::string cuda_device_name();
 
+// How the host threads of this process wait for device `device` (cudaStreamSynchronize and the
+// like): false, CUDA's default (spinning while the process has fewer contexts than the machine has
+// cores); true, asleep on a synchronisation primitive (cudaDeviceScheduleBlockingSync). Many
+// engines in threads of one process (sinew-sweep --concurrent K, K above the cores) wait most of
+// the time: spinning, they would take the cores that the threads whose queues ran dry need to
+// launch their next graphs. Throws sinew::Error on a CUDA failure; nothing without CUDA.
+void set_cuda_blocking_wait(int device, bool blocking);
+
 // The CUDA backend for the Setup's precision. Throws ConfigError on a bad Setup (make_plan), on a
 // build without CUDA or without a device, and sinew::Error on CUDA runtime failures.
 std::unique_ptr<Backend> make_cuda_backend(const formats::Model& model, const Setup& setup,

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -91,6 +92,10 @@ std::string read_scene_text(const std::string& path) {
 }
 
 LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>& adjust) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   LoadedRun r;
   r.cuda = choose_cuda(options.device);
   r.scene_text = read_scene_text(options.scene_path);
@@ -103,15 +108,25 @@ LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>&
                                   "scene's folder)",
                                   scene.model_path, scene.model));
   }
-  r.model = formats::read_model(scene.model_path);
+  if (options.models) {
+    auto file = options.models->get(scene.model_path);
+    r.model_sha256 = file->sha256;
+    r.model = std::shared_ptr<const formats::Model>(file, &file->model);
+  } else {
+    r.model = std::make_shared<const formats::Model>(formats::read_model(scene.model_path));
+  }
+  const formats::Model& model = *r.model;
+  r.model_s = seconds_since(start);
+  const auto engine_start = std::chrono::steady_clock::now();
   ResolveOptions ro;
   ro.precision = options.precision;
   ro.threads = options.threads;
-  r.resolved = resolve_scene(scene, r.model, ro);
+  r.resolved = resolve_scene(scene, model, ro);
   if (adjust) adjust(r.resolved.setup);
   const Setup& setup = r.resolved.setup;
   if (options.make_backend) r.cuda = false;  // the caller's engine, on the host
-  r.backend = make_backend(r.cuda, r.model, setup, options);
+  r.backend = make_backend(r.cuda, model, setup, options);
+  r.engine_s = seconds_since(engine_start);
   const Plan& plan = r.backend->plan();
   r.threads = options.threads > 0 ? options.threads : omp_get_max_threads();
 
@@ -132,13 +147,13 @@ LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>&
   summary.steps_planned = plan.steps;
   summary.warnings = plan.warnings;
   for (const auto& p : r.resolved.probes) {
-    if (p.distance > r.model.grid.voxel_size) {
+    if (p.distance > model.grid.voxel_size) {
       summary.warnings.push_back(
           fmt::format("probe '{}': the nearest node is {:.6g} m from the point (more than a voxel)",
                       p.name, p.distance));
     }
   }
-  r.counts = count_outputs(r.model, plan, r.resolved);
+  r.counts = count_outputs(model, plan, r.resolved);
   return r;
 }
 
@@ -165,7 +180,7 @@ std::string explain_run(LoadedRun& run, const RunOptions& options) {
                f == OutputField::energy_density;
       });
   text += describe(estimate_run(*run.backend, resolved, run.counts, element_fields));
-  if (options.explain_more) text += options.explain_more(run.model, run.backend->plan());
+  if (options.explain_more) text += options.explain_more(*run.model, run.backend->plan());
   return text;
 }
 

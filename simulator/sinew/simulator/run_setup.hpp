@@ -20,13 +20,16 @@ namespace sinew::simulator {
 struct LoadedRun {
   std::string scene_text;  // the scene file's bytes (the checkpoint digest)
   Scene scene;
-  formats::Model model;
+  std::shared_ptr<const formats::Model> model;  // never null after load_run
+  std::string model_sha256;  // the model file's SHA-256 when the ModelCache read it; else ""
   ResolvedScene resolved;
   std::unique_ptr<Backend> backend;
   bool cuda = false;
   int threads = 1;      // OpenMP threads of the CPU backend
   RunSummary summary;   // header filled: files, device, precision, effects, plan, warnings
   OutputCounts counts;  // count_outputs of the plan
+  // Wall time (s) of reading the scene and the model, and of resolving and building the engine.
+  double model_s = 0, engine_s = 0;
 };
 
 // Loads and plans options.scene_path on options.device. `adjust`, when given, may change the

@@ -43,6 +43,11 @@ std::string to_json(const RunSummary& s) {
   j["wall_time_s"] = s.wall_time_s;
   j["time_per_step_s"] = s.time_per_step_s;
   j["setup_s"] = s.setup_s;
+  auto setup = nlohmann::ordered_json::object();
+  for (const auto& [name, seconds] : s.setup_stages) setup[name] = seconds;
+  j["setup_stages_s"] = std::move(setup);
+  j["loop_start_unix_s"] = s.loop_start_unix_s;
+  j["loop_end_unix_s"] = s.loop_end_unix_s;
   // Each stage's share of the loop, as seconds and per step (time_per_step_s split by stage).
   auto stages = nlohmann::ordered_json::object();
   auto per_step = nlohmann::ordered_json::object();

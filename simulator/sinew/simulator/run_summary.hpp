@@ -33,6 +33,14 @@ struct RunSummary {
   double wall_time_s = 0;      // this process
   double time_per_step_s = 0;  // wall time of the step loop / steps_this_run
   double setup_s = 0;          // wall time before the step loop: model, plan, engine, writers
+  // setup_s by stage (s), in this order: "model" (reading the scene and the model file, or taking
+  // it from a ModelCache), "engine" (resolving the scene, the plan, the engine: on the GPU its
+  // device arrays and graph capture), "outputs" (creating or reopening results.h5 and the probe
+  // files, reading a checkpoint), "first_frame" (the first frame, probe row and this file).
+  std::vector<std::pair<std::string, double>> setup_stages;
+  // The step loop's start and end on the wall clock (s since 1970, UTC): where runs of one process
+  // (sinew-sweep --concurrent) stepped at the same time. 0 before the loop started / ended.
+  double loop_start_unix_s = 0, loop_end_unix_s = 0;
   // The step loop's wall time by stage (s, this process), in this order: "steps" (inside
   // Backend::step), "frames" (taking each frame: displacements and energies, and on the CPU its
   // fields and writing; on the GPU waiting for the frame thread when it falls behind), "probes",

@@ -72,6 +72,10 @@ std::string hourglass_warning(const Energies& e) {
       100.0 * e.hourglass / e.strain, e.time, e.step, 100.0 * kHourglassWarningShare);
 }
 
+double unix_seconds() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
 }  // namespace
 
 void install_interrupt_handlers() {
@@ -95,7 +99,7 @@ RunResult run_scene(const RunOptions& options) {
 
   LoadedRun run = load_run(options);
   const Scene& scene = run.scene;
-  const formats::Model& model = run.model;
+  const formats::Model& model = *run.model;
   const ResolvedScene& resolved = run.resolved;
   const Setup& setup = resolved.setup;
   std::unique_ptr<Backend>& backend = run.backend;
@@ -110,6 +114,7 @@ RunResult run_scene(const RunOptions& options) {
   if (!options.run) return result;
   check_output_limits(counts, resolved, options.scene_path, options.force);
 
+  const auto outputs_start = std::chrono::steady_clock::now();
   if (options.output_dir.empty()) throw ConfigError("", "--output", "no output directory given");
   std::error_code ec;
   fs::create_directories(options.output_dir, ec);
@@ -120,7 +125,10 @@ RunResult run_scene(const RunOptions& options) {
   };
   const auto summary_path = out("run_summary.json");
   const auto checkpoint_path = out("checkpoint.h5");
-  const auto digest = run_digest(run.scene_text, scene.model_path, summary.precision);
+  const auto digest =
+      run.model_sha256.empty()
+          ? run_digest(run.scene_text, scene.model_path, summary.precision)
+          : run_digest_from_hash(run.scene_text, run.model_sha256, summary.precision);
 
   const ResultsOptions ropt = results_options(scene, options.scene_path);
   const bool want_fields = ropt.stress || ropt.jacobian || ropt.energy_density;
@@ -155,6 +163,7 @@ RunResult run_scene(const RunOptions& options) {
     probes = std::make_unique<ProbeWriter>(options.output_dir, resolved.probes);
   }
 
+  const auto first_frame_start = std::chrono::steady_clock::now();
   const std::int64_t total = plan.steps;
   const double dt = backend->dt();
   const double s = setup.time_scaling;
@@ -218,6 +227,12 @@ RunResult run_scene(const RunOptions& options) {
   const std::int64_t first_step = backend->step_index();
   const auto loop_start = std::chrono::steady_clock::now();
   summary.setup_s = std::chrono::duration<double>(loop_start - wall_start).count();
+  summary.setup_stages = {
+      {"model", run.model_s},
+      {"engine", run.engine_s},
+      {"outputs", std::chrono::duration<double>(first_frame_start - outputs_start).count()},
+      {"first_frame", std::chrono::duration<double>(loop_start - first_frame_start).count()}};
+  summary.loop_start_unix_s = unix_seconds();
   StageClock clock;
   std::int64_t next_frame = frames.next_after(first_step);
   std::int64_t next_row = rows.next_after(first_step);
@@ -229,6 +244,7 @@ RunResult run_scene(const RunOptions& options) {
     summary.time_per_step_s =
         summary.steps_this_run > 0 ? loop_s / double(summary.steps_this_run) : 0.0;
     summary.loop_stages = clock.stages(loop_s);
+    summary.loop_end_unix_s = unix_seconds();
   };
   try {
     while (backend->step_index() < total) {

@@ -16,6 +16,7 @@
 
 #include "sinew/formats/model.hpp"
 #include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/model_cache.hpp"
 #include "sinew/simulator/plan.hpp"
 #include "sinew/simulator/run_summary.hpp"
 #include "sinew/simulator/scene.hpp"
@@ -46,6 +47,10 @@ struct RunOptions {
   // The engine to run instead of --device's (sinew-simulate-parts: the partitioned engine under
   // mpirun, whose every call is collective); null: make_cpu_backend or make_cuda_backend.
   std::function<std::unique_ptr<Backend>(const formats::Model&, const Setup&)> make_backend;
+  // Where the model file is read: null, read here (sinew-simulate); else from this cache, read
+  // once per process and shared with the other runs that use it (sinew-sweep). Not owned; it must
+  // outlive the run. The same checks and errors either way.
+  ModelCache* models = nullptr;
 };
 
 struct RunResult {

@@ -17,6 +17,7 @@
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/run_summary.hpp"
 #include "sinew/simulator/runner.hpp"
 
@@ -71,7 +72,8 @@ bool run_is_finished(const SweepOptions& options, const PlannedRun& run) {
          is_finished_status(summary_status(dir));
 }
 
-Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options) {
+Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options,
+                simulator::ModelCache* models) {
   const log::ScopedContext context(run.name);  // the runner's messages name the run
   const fs::path dir = run_directory(options, run);
   const auto scene_path = (dir / "scene.yaml").string();
@@ -90,6 +92,7 @@ Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& o
   ro.cuda_device = options.cuda_device;
   ro.quiet = true;
   ro.force = options.settings.force;
+  ro.models = models;
   std::string failure;
   try {
     // An interrupted attempt of this very run (a SIGTERM, or mpirun ending the job when another
@@ -184,8 +187,17 @@ std::vector<std::size_t> start_sweep(const Sweep& sweep, const SweepOptions& opt
   return pending;
 }
 
+void choose_gpu_wait(const SweepOptions& options) {
+  if (options.settings.device == "cpu" || !simulator::cuda_device_available()) return;
+  const int cores = std::max(1, omp_get_num_procs() / std::max(1, options.ranks_on_machine));
+  const bool block = options.gpu_wait == "block" ||
+                     (options.gpu_wait == "auto" && options.settings.concurrent > cores);
+  simulator::set_cuda_blocking_wait(options.cuda_device, block);
+}
+
 SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options) {
   const int concurrent = std::max(1, options.settings.concurrent);
+  choose_gpu_wait(options);
   SweepReport report;
   const auto pending = start_sweep(sweep, options, report);
 
@@ -194,11 +206,12 @@ SweepReport run_sweep(const Sweep& sweep, const SweepOptions& options) {
   double last_table = now_s();
   std::atomic<std::size_t> next{0};
   std::exception_ptr table_error;
+  simulator::ModelCache models;
   const auto worker = [&] {
     for (std::size_t k = next++; k < pending.size() && !simulator::interrupt_requested();
          k = next++) {
       const auto& run = sweep.runs[pending[k]];
-      Row row = execute_run(sweep, run, options);
+      Row row = execute_run(sweep, run, options, &models);
       std::lock_guard lock(mutex);
       report.rows[pending[k]] = std::move(row);
       ++report.ran;

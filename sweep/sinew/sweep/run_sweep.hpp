@@ -14,12 +14,15 @@
 // (on one GPU, each CUDA engine has its own streams, so small models share the GPU). The runner's
 // libraries are safe for this: the logger is spdlog's thread-safe one; every HDF5 call goes
 // through formats' one lock (hdf5_file.hpp), so any HDF5 build works, thread-safe or not, and the
-// runs' HDF5 I/O does not overlap; the interrupt flag is atomic.
+// runs' HDF5 I/O does not overlap; the interrupt flag is atomic. Each model file is read once per
+// process and shared by the runs that use it (simulator::ModelCache): the runs' set-ups do not
+// queue behind one another's model reads.
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "sinew/simulator/model_cache.hpp"
 #include "sinew/sweep/sweep_file.hpp"
 #include "sinew/sweep/table.hpp"
 
@@ -33,7 +36,15 @@ struct SweepOptions {
   // Share of the machine's cores for this process's runs (MPI: several ranks on one machine);
   // threads per run default to cores / (ranks_on_machine × concurrent), at least 1.
   int ranks_on_machine = 1;
+  // How the runs' threads wait for the GPU (simulator::set_cuda_blocking_wait): "auto" asleep when
+  // more runs are at once than this process has cores (spinning waits would starve the threads
+  // that launch), spinning otherwise; "block", "spin" (sweep_bench compares them).
+  std::string gpu_wait = "auto";
 };
+
+// Sets how this process's threads wait for its GPU for `options` (gpu_wait): when its runs may
+// use CUDA and a device is there; nothing otherwise.
+void choose_gpu_wait(const SweepOptions& options);
 
 // Terminal statuses: a run with one of these in its summary is finished.
 bool is_finished_status(const std::string& status);
@@ -43,8 +54,10 @@ std::string run_directory(const SweepOptions& options, const PlannedRun& run);
 // True when the run's folder holds this run's scene and a summary with a terminal status.
 bool run_is_finished(const SweepOptions& options, const PlannedRun& run);
 // Runs one run (after clearing what an unfinished attempt left in its folder) and returns its
-// row. Never throws for the run's own failures: they are its row's status and message.
-Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options);
+// row. Never throws for the run's own failures: they are its row's status and message. `models`,
+// when given, is where the run reads its model file: once per process for all runs that share it.
+Row execute_run(const Sweep& sweep, const PlannedRun& run, const SweepOptions& options,
+                simulator::ModelCache* models = nullptr);
 
 // Counts finished and failed runs and prints the progress line with the ETA.
 class SweepProgress {

@@ -91,8 +91,10 @@ SweepReport manage(const Sweep& sweep, const SweepOptions& options, int workers)
 }
 
 SweepReport work(const Sweep& sweep, const SweepOptions& options) {
+  choose_gpu_wait(options);
   SweepReport report;
   const std::size_t slots = std::size_t(std::max(1, options.settings.concurrent));
+  simulator::ModelCache models;  // each model file read once by this rank (outlives the runs)
   std::vector<std::future<Row>> running;
   bool more = true;
   while (more || !running.empty()) {
@@ -110,8 +112,8 @@ SweepReport work(const Sweep& sweep, const SweepOptions& options) {
         break;
       }
       const auto& run = sweep.runs[std::size_t(index)];
-      running.push_back(std::async(std::launch::async, [&sweep, &run, &options] {
-        return execute_run(sweep, run, options);
+      running.push_back(std::async(std::launch::async, [&sweep, &run, &options, &models] {
+        return execute_run(sweep, run, options, &models);
       }));
     }
     bool any = false;

@@ -20,18 +20,13 @@
 namespace sinew::simulator::cuda {
 
 // Engines in several host threads (sinew-sweep --concurrent, sinew-live beside a batch run) share
-// the device: one engine's graph capture and another's device-wide synchronisation must not
-// overlap, since cudaDeviceSynchronize waits on every stream, the capturing one too, which
-// invalidates that capture. Captures and device-wide syncs take this lock.
+// the device. None of them synchronises the whole device (cudaDeviceSynchronize): that would wait
+// for every other engine's queued graphs, stall their queues meanwhile, and invalidate a capture
+// in progress. Each engine waits for its own streams only (DeviceArray's transfers take the
+// stream). Graph captures take this lock, so that they stay one at a time.
 inline std::mutex& capture_mutex() {
   static std::mutex m;
   return m;
-}
-
-// cudaDeviceSynchronize under capture_mutex().
-inline void device_synchronize() {
-  std::lock_guard lock(capture_mutex());
-  SINEW_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
 }  // namespace sinew::simulator::cuda

@@ -24,6 +24,18 @@ bool cuda_device_available() {
   return cuda_device_count() > 0;
 }
 
+void set_cuda_blocking_wait(int device, bool blocking) {
+  // On a device already in use the primary context's flags are replaced (CUDA 11 and later).
+  SINEW_CUDA_CHECK(cudaSetDevice(device));
+  unsigned flags = 0;
+  SINEW_CUDA_CHECK(cudaGetDeviceFlags(&flags));
+  // The other flags kept, but cudaDeviceMapHost, which the getter may report and the setter does
+  // not take (it is implicit).
+  flags = (flags & ~unsigned(cudaDeviceScheduleMask | cudaDeviceMapHost)) |
+          (blocking ? cudaDeviceScheduleBlockingSync : cudaDeviceScheduleAuto);
+  SINEW_CUDA_CHECK(cudaSetDeviceFlags(flags));
+}
+
 namespace detail {
 bool cuda_device_properties(CudaDeviceProperties& out) {
   if (!cuda_device_available()) return false;

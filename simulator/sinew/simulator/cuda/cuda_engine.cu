@@ -37,13 +37,13 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   SINEW_CUDA_CHECK(cudaStreamCreateWithFlags(&copy_stream_, cudaStreamNonBlocking));
   SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&copy_ready_, cudaEventDisableTiming));
 
-  elem_nodes_.upload(a.element_nodes);
-  row_.upload(a.row);
-  rows_.upload(a.rows);
+  elem_nodes_.upload(a.element_nodes, stream_);
+  row_.upload(a.row, stream_);
+  rows_.upload(a.rows, stream_);
   for (const auto& c : core_.plan().collections) {
     DeviceCollection dc;
     dc.muscle = c.muscle;
-    dc.elements.upload(c.elements);
+    dc.elements.upload(c.elements, stream_);
     collections_.push_back(std::move(dc));
   }
   SINEW_CUDA_CHECK(
@@ -65,11 +65,11 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     SINEW_CUDA_CHECK(cudaEventCreateWithFlags(&side_done_.back(), cudaEventDisableTiming));
   }
   if (fx.muscles) {
-    muscle_offset_.upload(a.muscle_offset);
-    muscle_id_.upload(a.muscle_id);
-    muscle_fraction_.upload(a.muscle_fraction);
-    muscle_fibre_.upload(a.muscle_fibre);
-    muscle_params_.upload(a.muscle_params);
+    muscle_offset_.upload(a.muscle_offset, stream_);
+    muscle_id_.upload(a.muscle_id, stream_);
+    muscle_fraction_.upload(a.muscle_fraction, stream_);
+    muscle_fibre_.upload(a.muscle_fibre, stream_);
+    muscle_params_.upload(a.muscle_params, stream_);
     muscles_ = a.muscle_params.size();
   }
   if (options.assembly == ForceAssembly::tiled || options.assembly == ForceAssembly::automatic) {
@@ -81,9 +81,9 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     if (options.assembly == ForceAssembly::automatic)
       options_.assembly = tiles_pay_off(tiles, e_) ? ForceAssembly::tiled : ForceAssembly::gather;
     if (options_.assembly == ForceAssembly::tiled) {
-      tile_layers_.upload(tiles.tile_layers);
-      tile_window_.upload(tiles.window_node);
-      tile_slot_.upload(tiles.slot_element);
+      tile_layers_.upload(tiles.tile_layers, stream_);
+      tile_window_.upload(tiles.window_node, stream_);
+      tile_slot_.upload(tiles.slot_element, stream_);
       tile_data_ = {tile_layers_.get(), tile_window_.get(), tile_slot_.get(),
                     std::int64_t(tiles.window_stride()), std::int64_t(tiles.slot_stride())};
     }
@@ -92,9 +92,9 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     elem_force_.allocate(e_ * 8);
   } else if (options_.assembly == ForceAssembly::atomic) {
     f_sum_.allocate(n_);
-    f_sum_.zero();
+    f_sum_.zero(stream_);
   }
-  inc_offset_.upload(a.incidence_offset);
+  inc_offset_.upload(a.incidence_offset, stream_);
   {
     // The gather reads the corner-major buffer: entry e · 8 + a of the incidence becomes a · E + e
     // (same entries, same order: the summation order is the CPU's).
@@ -103,40 +103,40 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
       const auto v = std::size_t(a.incidence[k]);
       inc[k] = std::int32_t((v % 8) * e_ + v / 8);
     }
-    inc_.upload(inc);
+    inc_.upload(inc, stream_);
   }
   f_.allocate(n_);
-  inverse_mass_.upload(a.inverse_mass);
-  rest_.upload(a.rest);
-  if (fx.gravity) gravity_.upload(a.gravity);
+  inverse_mass_.upload(a.inverse_mass, stream_);
+  rest_.upload(a.rest, stream_);
+  if (fx.gravity) gravity_.upload(a.gravity, stream_);
   for (auto& b : buf_) b.allocate(n_);
   snap_u_.allocate(n_);
   snap_up_.allocate(n_);
 
   // Loads and constraints: the constraint program of the core (per node its ops in the one order).
   const ConstraintArrays<T>& program = a.constraints;
-  node_op_offset_.upload(program.node_op_offset);
-  con_node_.upload(program.node);
-  con_offset_.upload(program.offset);
-  con_op_.upload(program.op);
-  force_per_node_.upload(program.force_per_node);
-  prescribed_value_.upload(program.prescribed_value);
-  prescribed_mask_.upload(program.prescribed_mask);
-  prescribed_set_.upload(program.prescribed_set);
+  node_op_offset_.upload(program.node_op_offset, stream_);
+  con_node_.upload(program.node, stream_);
+  con_offset_.upload(program.offset, stream_);
+  con_op_.upload(program.op, stream_);
+  force_per_node_.upload(program.force_per_node, stream_);
+  prescribed_value_.upload(program.prescribed_value, stream_);
+  prescribed_mask_.upload(program.prescribed_mask, stream_);
+  prescribed_set_.upload(program.prescribed_set, stream_);
   prescribed_free_.allocate(program.prescribed_set.size());
-  plane_normals_.upload(program.plane_normal);
+  plane_normals_.upload(program.plane_normal, stream_);
   if (!a.surfaces.empty()) {
     std::vector<SlideSurface<T>> views;
     for (const auto& s : a.surfaces) {
       auto ds = std::make_unique<DeviceSurface<T>>();
-      ds->vertices.upload(s.vertices);
-      ds->normals.upload(s.normals);
-      ds->triangles.upload(s.triangles);
-      ds->cell_offsets.upload(s.grid.cell_offsets);
-      ds->cell_triangles.upload(s.grid.cell_triangles);
-      ds->entry_corners.upload(s.lists.corners);
-      ds->cell_boxes.upload(s.lists.cell);
-      ds->triangle_corners.upload(s.triangle_corners);
+      ds->vertices.upload(s.vertices, stream_);
+      ds->normals.upload(s.normals, stream_);
+      ds->triangles.upload(s.triangles, stream_);
+      ds->cell_offsets.upload(s.grid.cell_offsets, stream_);
+      ds->cell_triangles.upload(s.grid.cell_triangles, stream_);
+      ds->entry_corners.upload(s.lists.corners, stream_);
+      ds->cell_boxes.upload(s.lists.cell, stream_);
+      ds->triangle_corners.upload(s.triangle_corners, stream_);
       SurfaceView<T> view = s.view();  // the host view's grid, with device pointers
       view.vertices = ds->vertices.get();
       view.triangles = ds->triangles.get();
@@ -148,19 +148,19 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
       views.push_back({view, ds->triangle_corners.get(), s.skin});
       surfaces_.push_back(std::move(ds));
     }
-    slide_surfaces_.upload(views);
+    slide_surfaces_.upload(views, stream_);
     const std::size_t slides = a.slide_node.size();
-    slide_node_.upload(a.slide_node);
-    slide_surface_.upload(a.slide_surface);
-    slide_triangle_.upload(a.slide_triangle);
+    slide_node_.upload(a.slide_node, stream_);
+    slide_surface_.upload(a.slide_surface, stream_);
+    slide_triangle_.upload(a.slide_triangle, stream_);
     snap_triangle_.allocate(slides);
-    slide_search_triangle_.upload(a.slide_triangle);
+    slide_search_triangle_.upload(a.slide_triangle, stream_);
     slide_list_count_.allocate(slides);
     slide_list_.allocate(slides * kCandidates);
     slide_list_distance_.allocate(slides * kCandidates);
     slide_anchor_.allocate(slides);
     forget_slide_lists(stream_);
-    slide_distance_.upload(a.slide_distance);
+    slide_distance_.upload(a.slide_distance, stream_);
   }
   const PreparedModel& prep = core_.prepared();
   // Work: loads, prescribed sets and projections (sliding, planes), as run_program counts it.
@@ -168,17 +168,17 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
           !prep.slide_node.empty() || !prep.plane_nodes.empty();
   program_in_node_ = prep.slide_node.empty() && (con_node_.size() || work_);
   work_base_.allocate(1);
-  work_base_.zero();
+  work_base_.zero(stream_);
   if (work_) {
     work_acc_.allocate(n_);
-    work_acc_.zero();
+    work_acc_.zero(stream_);
     snap_work_acc_.allocate(n_);
   }
   work_partial_.allocate(std::max<std::size_t>(blocks_for(n_), tile_layers_.size()));
   ke_partial_.allocate(std::max<std::size_t>(blocks_for(n_), tile_layers_.size()));
   counters_.allocate(1);
-  counters_.zero();
-  bound_.upload({BlowupBound{0, 0}});
+  counters_.zero(stream_);
+  bound_.upload({BlowupBound{0, 0}}, stream_);
 
   energy_flag_ = core_.step_scalar_count();
   scalars_per_slot_ = energy_flag_ + 1;
@@ -186,14 +186,13 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   ring_rows_ = std::size_t(kQueuedBatches + 1) * std::size_t(batch_ + 1);
   scalars_host_.allocate(scalars_per_slot_ * ring_rows_);
   status_.allocate(1);
-  status_.zero();
+  status_.zero(stream_);
   status_host_.allocate(1);
   output_.allocate(n_);
 
   // Initial state: u(0) = 0 with the constraints at t = 0; u(−1) = u(0) − v0 Δt (as the CPU).
-  device_synchronize();
   {
-    buf_[0].zero();
+    buf_[0].zero(stream_);
     // Constraints at t = 0 on the host path of the device kernels: run them on buffer 0.
     fill_scalars(-1, 1, int(batch_));  // slot `batch_`: prescribed factors at t = 0
     Vec3<T>* u0 = buf_[0].get();
@@ -206,9 +205,9 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
         for (int k = 0; k < 3; ++k)
           up[std::size_t(nd)][k] = u[std::size_t(nd)][k] - T(v.velocity[std::size_t(k)] * dt());
     for (auto nd : prep.rigid) up[std::size_t(nd)] = u[std::size_t(nd)];
-    SINEW_CUDA_CHECK(
-        cudaMemcpy(buf_[2].get(), up.data(), n_ * sizeof(Vec3<T>), cudaMemcpyHostToDevice));
-    device_synchronize();
+    SINEW_CUDA_CHECK(cudaMemcpyAsync(buf_[2].get(), up.data(), n_ * sizeof(Vec3<T>),
+                                     cudaMemcpyHostToDevice, stream_));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
   }
   core_.set_initial_energy(energies());
   update_bound();
@@ -217,6 +216,11 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
 
 template <typename T>
 CudaEngine<T>::~CudaEngine() {
+  // The arrays are freed after this body, without waiting for the device (DeviceArray): nothing of
+  // this engine may still run then.
+  for (cudaStream_t st : {stream_, copy_stream_, slide_stream_})
+    if (st) cudaStreamSynchronize(st);
+  for (cudaStream_t st : side_streams_) cudaStreamSynchronize(st);
   destroy_graphs();
   if (copy_ready_) cudaEventDestroy(copy_ready_);
   if (stream_) cudaStreamDestroy(stream_);

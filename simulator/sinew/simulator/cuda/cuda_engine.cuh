@@ -162,16 +162,22 @@ class CudaEngine final : public Backend, public CudaTiming {
   }
   double external_work() const;
   void check_blowup(double work);
-  void update_bound() {
+  void update_bound() {  // into the array the captured graphs read: never reallocated
     const BlowupBound b = core_.blowup_bound();
-    SINEW_CUDA_CHECK(cudaMemcpy(bound_.get(), &b, sizeof b, cudaMemcpyHostToDevice));
-    device_synchronize();
+    SINEW_CUDA_CHECK(cudaMemcpyAsync(bound_.get(), &b, sizeof b, cudaMemcpyHostToDevice, stream_));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
   }
-  // A device copy of the activations at the current step (energies and forces on demand).
-  void upload_activation(DeviceArray<T>& a) const {
+  // The activations at the current step, in activation_now_ (energies and forces on demand); null
+  // without muscles. In stream order: no allocation, no device-wide synchronisation.
+  const T* upload_activation() {
     std::vector<T> host(core_.muscle_count());
+    if (host.empty()) return nullptr;
     core_.activations(time(), host.data());
-    a.upload(host);
+    if (activation_now_.size() != host.size()) activation_now_.allocate(host.size());
+    SINEW_CUDA_CHECK(cudaMemcpyAsync(activation_now_.get(), host.data(), host.size() * sizeof(T),
+                                     cudaMemcpyHostToDevice, stream_));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));  // `host` is read before it goes
+    return activation_now_.get();
   }
 
   BackendCore core_;
@@ -220,6 +226,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<Vec3<T>> snap_u_, snap_up_;
   DeviceArray<double> element_energy_;
   DeviceArray<double> energy_chunk_sum_;  // 2 per chunk of each collection (energies)
+  DeviceArray<T> activation_now_;         // upload_activation
   // per-step scalars: per slot [activation (M) | force factors (F) | prescribed factors (P) |
   // energy test flag (1)];
   // device slots 0 .. batch_ − 1 for the graph, slot batch_ for a single launched step; staged on
@@ -317,9 +324,16 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<StepStatus> status_;
   PinnedArray<StepStatus> status_host_;
   mutable PinnedArray<Vec3<T>> output_;
-  mutable std::vector<Index> picked_list_;  // the node list picked_ids_ holds
-  mutable DeviceArray<std::int32_t> picked_ids_;
-  mutable DeviceArray<Vec3<T>> picked_;
+  // The node lists pick() was asked for (a run's probes: one list of displacement nodes and one
+  // per reaction set, asked in turn at every row), each uploaded once (kPickedLists at most).
+  struct PickedNodes {
+    std::vector<Index> nodes;
+    DeviceArray<std::int32_t> ids;
+    DeviceArray<Vec3<T>> values;
+  };
+  static constexpr std::size_t kPickedLists = 8;
+  mutable std::vector<PickedNodes> picked_;
+  mutable std::size_t picked_next_ = 0;  // the entry replaced when all kPickedLists are taken
 };
 
 }  // namespace sinew::simulator::cuda

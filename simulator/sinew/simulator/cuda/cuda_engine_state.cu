@@ -27,7 +27,9 @@ std::vector<Vec3<T>> CudaEngine<T>::download_vec_n(const Vec3<T>* p, std::size_t
 template <typename T>
 void CudaEngine<T>::upload_vec(Vec3<T>* p, const std::vector<double>& flat) {
   const std::vector<Vec3<T>> v = unflatten<T>(flat);
-  SINEW_CUDA_CHECK(cudaMemcpy(p, v.data(), n_ * sizeof(Vec3<T>), cudaMemcpyHostToDevice));
+  SINEW_CUDA_CHECK(
+      cudaMemcpyAsync(p, v.data(), n_ * sizeof(Vec3<T>), cudaMemcpyHostToDevice, stream_));
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));  // `v` is read before it goes
 }
 
 template <typename T>
@@ -52,9 +54,7 @@ template <typename T>
 void CudaEngine<T>::compute_energy_terms(double& strain, double& hourglass) {
   if (element_energy_.size() != 2 * e_) element_energy_.allocate(2 * e_);
   if (!elem_force_.size()) elem_force_.allocate(e_ * 8);
-  DeviceArray<T> a;
-  upload_activation(a);
-  launch_elements(buffer(step_, 0), a.get(), 2, stream_);
+  launch_elements(buffer(step_, 0), upload_activation(), 2, stream_);
   // Summed per collection in element-list order, chunk by chunk (the CPU's order): the chunks on
   // the device (ChunkPairSumBody, the host's additions in the host's order), only their sums
   // copied back and added here in order.
@@ -71,7 +71,7 @@ void CudaEngine<T>::compute_energy_terms(double& strain, double& hourglass) {
     at += k;
   }
   SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
-  const auto sums = energy_chunk_sum_.download();
+  const auto sums = energy_chunk_sum_.download(stream_);
   strain = hourglass = 0;
   for (std::size_t c = 0; c < chunks; ++c) {
     strain += sums[2 * c];
@@ -151,21 +151,29 @@ template <typename T>
 std::vector<Vec3<T>> CudaEngine<T>::pick(const Vec3<T>* from,
                                          const std::vector<Index>& nodes) const {
   if (nodes.empty()) return {};
-  if (nodes != picked_list_) {  // probes ask for the same nodes at every row: uploaded once
-    picked_ids_.upload(nodes);
-    picked_.allocate(nodes.size());
-    picked_list_ = nodes;
+  // Probes ask for the same lists at every row: each is uploaded once (a new upload would free and
+  // allocate, and cudaFree waits for the whole device).
+  auto it = std::find_if(picked_.begin(), picked_.end(),
+                         [&](const PickedNodes& p) { return p.nodes == nodes; });
+  if (it == picked_.end()) {
+    if (picked_.size() < kPickedLists) {
+      picked_.emplace_back();
+      it = picked_.end() - 1;
+    } else {
+      it = picked_.begin() + std::ptrdiff_t(picked_next_++ % kPickedLists);
+    }
+    it->nodes = nodes;
+    it->ids.upload(nodes, stream_);
+    it->values.allocate(nodes.size());
   }
-  forall(nodes.size(), stream_, CopyNodesBody<T>{picked_ids_.get(), from, picked_.get()});
-  return download_vec_n(picked_.get(), nodes.size());
+  forall(nodes.size(), stream_, CopyNodesBody<T>{it->ids.get(), from, it->values.get()});
+  return download_vec_n(it->values.get(), nodes.size());
 }
 
 template <typename T>
 void CudaEngine<T>::compute_internal_forces() {
   if (!elem_force_.size()) elem_force_.allocate(e_ * 8);
-  DeviceArray<T> a;
-  upload_activation(a);
-  launch_elements(buffer(step_, 0), a.get(), 0, stream_);
+  launch_elements(buffer(step_, 0), upload_activation(), 0, stream_);
   const NodeData<T> nodes{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
                           std::int32_t(n_)};
   forall(n_, stream_, GatherBody<T>{nodes, elem_force_.get(), f_.get()});
@@ -196,7 +204,7 @@ ElementFields CudaEngine<T>::element_fields() {
 template <typename T>
 State CudaEngine<T>::state() const {
   return core_.make_state(step_, download_vec(buffer(step_, 0)), download_vec(buffer(step_, 2)),
-                          slide_triangle_.download(), external_work());
+                          slide_triangle_.download(stream_), external_work());
 }
 
 template <typename T>
@@ -207,17 +215,18 @@ void CudaEngine<T>::restore(const State& s) {
   upload_vec(buffer(step_, 0), s.u);
   upload_vec(buffer(step_, 2), s.u_prev);
   if (!s.sliding_triangle.empty()) {
-    SINEW_CUDA_CHECK(cudaMemcpy(slide_triangle_.get(), s.sliding_triangle.data(),
-                                slide_triangle_.bytes(), cudaMemcpyHostToDevice));
-    SINEW_CUDA_CHECK(cudaMemcpy(slide_search_triangle_.get(), s.sliding_triangle.data(),
-                                slide_search_triangle_.bytes(), cudaMemcpyHostToDevice));
+    SINEW_CUDA_CHECK(cudaMemcpyAsync(slide_triangle_.get(), s.sliding_triangle.data(),
+                                     slide_triangle_.bytes(), cudaMemcpyHostToDevice, stream_));
+    SINEW_CUDA_CHECK(cudaMemcpyAsync(slide_search_triangle_.get(), s.sliding_triangle.data(),
+                                     slide_search_triangle_.bytes(), cudaMemcpyHostToDevice,
+                                     stream_));
   }
-  SINEW_CUDA_CHECK(
-      cudaMemcpy(work_base_.get(), &s.external_work, sizeof(double), cudaMemcpyHostToDevice));
-  if (work_acc_.size()) work_acc_.zero();
-  if (f_sum_.size()) f_sum_.zero();
+  SINEW_CUDA_CHECK(cudaMemcpyAsync(work_base_.get(), &s.external_work, sizeof(double),
+                                   cudaMemcpyHostToDevice, stream_));
+  if (work_acc_.size()) work_acc_.zero(stream_);
+  if (f_sum_.size()) f_sum_.zero(stream_);
   forget_slide_lists(stream_);
-  device_synchronize();
+  SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
   core_.set_energy_reference(s.energy_reference);
   update_bound();
 }
@@ -285,15 +294,16 @@ void CudaEngine<T>::reload_program(bool nodes_changed) {
   const ConstraintArrays<T>& program = arrays_.constraints;
   if (!nodes_changed) {
     // Same sets, same size: the captured graphs keep reading this array.
-    SINEW_CUDA_CHECK(cudaMemcpy(force_per_node_.get(), program.force_per_node.data(),
-                                force_per_node_.bytes(), cudaMemcpyHostToDevice));
+    SINEW_CUDA_CHECK(cudaMemcpyAsync(force_per_node_.get(), program.force_per_node.data(),
+                                     force_per_node_.bytes(), cudaMemcpyHostToDevice, stream_));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
     return;
   }
-  node_op_offset_.upload(program.node_op_offset);
-  con_node_.upload(program.node);
-  con_offset_.upload(program.offset);
-  con_op_.upload(program.op);
-  force_per_node_.upload(program.force_per_node);
+  node_op_offset_.upload(program.node_op_offset, stream_);
+  con_node_.upload(program.node, stream_);
+  con_offset_.upload(program.offset, stream_);
+  con_op_.upload(program.op, stream_);
+  force_per_node_.upload(program.force_per_node, stream_);
   // The graphs hold the old arrays and counts (constraint_data() by value): capture them again.
   build_graph();
 }

@@ -1,5 +1,6 @@
 #pragma once
-// Device and pinned host arrays of the CUDA engine (RAII over cudaMalloc / cudaMallocHost).
+// Device and pinned host arrays of the CUDA engine (RAII over CUDA's stream-ordered allocator, or
+// cudaMalloc where a device has none, and cudaMallocHost).
 #include <cuda_runtime.h>
 
 #include <cstddef>
@@ -9,6 +10,23 @@
 #include "sinew/simulator/cuda/cuda_check.cuh"
 
 namespace sinew::simulator::cuda {
+
+// Whether the current device has CUDA's stream-ordered allocator (cudaMallocAsync, cudaFreeAsync:
+// CUDA 11.2 and later, most devices). cudaFree waits for the whole device, that is for the graphs
+// every engine of the process has queued; cudaFreeAsync waits for nothing.
+inline bool stream_ordered_allocator() {
+  static const bool yes = [] {
+    int device = 0, supported = 0;
+    if (cudaGetDevice(&device) != cudaSuccess ||
+        cudaDeviceGetAttribute(&supported, cudaDevAttrMemoryPoolsSupported, device) !=
+            cudaSuccess) {
+      cudaGetLastError();
+      return false;
+    }
+    return supported != 0;
+  }();
+  return yes;
+}
 
 template <typename V>
 class DeviceArray {
@@ -25,30 +43,48 @@ class DeviceArray {
     std::swap(n_, o.n_);
     return *this;
   }
+  // Freed on the legacy stream, which orders itself after none of the engines' non-blocking
+  // streams: whoever frees or reallocates makes sure no queued work still uses the array (the
+  // engine synchronises its streams first).
   ~DeviceArray() {
-    if (p_) cudaFree(p_);
+    if (p_) stream_ordered_allocator() ? cudaFreeAsync(p_, cudaStreamLegacy) : cudaFree(p_);
   }
   void allocate(std::size_t n) {
-    if (p_) SINEW_CUDA_CHECK(cudaFree(p_));
+    if (p_)
+      SINEW_CUDA_CHECK(stream_ordered_allocator() ? cudaFreeAsync(p_, cudaStreamLegacy)
+                                                  : cudaFree(p_));
     p_ = nullptr;
     n_ = n;
-    if (n) SINEW_CUDA_CHECK(cudaMalloc(&p_, n * sizeof(V)));
+    if (!n) return;
+    if (!stream_ordered_allocator()) {
+      SINEW_CUDA_CHECK(cudaMalloc(&p_, n * sizeof(V)));
+      return;
+    }
+    SINEW_CUDA_CHECK(cudaMallocAsync(&p_, n * sizeof(V), cudaStreamLegacy));
+    // Usable on every stream from here (the legacy stream holds nothing else of the engines').
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(cudaStreamLegacy));
   }
-  // Setup-time transfers on the legacy stream, completed before returning (the engine's work runs
-  // on a non-blocking stream that does not order itself after the legacy stream).
-  void upload(const std::vector<V>& v) {
+  // Transfers in the order of `stream` (the engine's step stream), completed before returning.
+  // Only that stream is waited for: a device-wide synchronisation would also wait for the graphs
+  // that engines of other host threads (sinew-sweep --concurrent) have queued, and stall their
+  // queues meanwhile.
+  void upload(const std::vector<V>& v, cudaStream_t stream) {
     allocate(v.size());
-    if (n_) SINEW_CUDA_CHECK(cudaMemcpy(p_, v.data(), n_ * sizeof(V), cudaMemcpyHostToDevice));
-    device_synchronize();
+    if (n_)
+      SINEW_CUDA_CHECK(
+          cudaMemcpyAsync(p_, v.data(), n_ * sizeof(V), cudaMemcpyHostToDevice, stream));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream));
   }
-  void zero() {
-    if (n_) SINEW_CUDA_CHECK(cudaMemset(p_, 0, n_ * sizeof(V)));
-    device_synchronize();
+  void zero(cudaStream_t stream) {
+    if (n_) SINEW_CUDA_CHECK(cudaMemsetAsync(p_, 0, n_ * sizeof(V), stream));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream));
   }
-  std::vector<V> download() const {
-    device_synchronize();
+  std::vector<V> download(cudaStream_t stream) const {
     std::vector<V> v(n_);
-    if (n_) SINEW_CUDA_CHECK(cudaMemcpy(v.data(), p_, n_ * sizeof(V), cudaMemcpyDeviceToHost));
+    if (n_)
+      SINEW_CUDA_CHECK(
+          cudaMemcpyAsync(v.data(), p_, n_ * sizeof(V), cudaMemcpyDeviceToHost, stream));
+    SINEW_CUDA_CHECK(cudaStreamSynchronize(stream));
     return v;
   }
   V* get() const { return p_; }
