@@ -192,8 +192,10 @@ void expect_motion(const std::string& name, const ExpressionRun& r) {
     EXPECT_LT(u("mouth_corner_left").x, -1.0);  // the sphincter narrows the mouth
     EXPECT_GT(u("mouth_corner_right").x, 1.0);
   } else if (name == "grimace") {
-    EXPECT_LT(u("brow_inner_left").x, -0.5);    // the frown in it
-    EXPECT_LT(u("mouth_corner_left").z, -0.5);  // the corners drawn back
+    EXPECT_LT(u("brow_inner_left").x, -0.5);  // the frown in it
+    // The corners drawn back (0.48 mm at 4 mm, 0.6 at 3 mm; 0.5 and 0.7 before the depressors'
+    // self-intersecting sheets were filled by the winding number, docs/voxelizer.md).
+    EXPECT_LT(u("mouth_corner_left").z, -0.3);
   }
 }
 
