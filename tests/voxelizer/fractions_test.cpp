@@ -9,6 +9,8 @@
 #include <random>
 
 #include "pipeline_test_util.hpp"
+#include "sinew/voxelizer/primitives.hpp"
+#include "sinew/voxelizer/self_intersection.hpp"
 
 namespace sinew::voxelizer {
 namespace {
@@ -148,6 +150,37 @@ regions:
   EXPECT_NEAR(material_volume(r.summary, "skin") / mm3, 1000 - 216 + sphere, 0.01 * (784 + sphere));
   EXPECT_NEAR(material_volume(r.summary, "ball") / mm3, 6 * 6 * 3 - sphere / 2, 0.01 * 108);
   EXPECT_NEAR(material_volume(r.summary, "core") / mm3, 216 - 108 - sphere / 2, 0.01 * 100);
+}
+
+// Two overlapping boxes written as one mesh: closed, manifold, outward, a positive enclosed
+// volume, yet folded over itself, and there the sign of the closest feature's pseudonormal is wrong
+// (a point of box A just outside box B's face that lies inside A is called outside). The
+// voxelizer detects the self-intersection and uses the winding number: the tissue is the union,
+// A 20 mm cube and B 20 x 10 x 10 mm overlapping it by 10 x 10 x 10 mm: 8000 + 2000 - 1000 mm^3.
+// One box, and the two boxes apart, do not intersect themselves.
+TEST(SelfIntersection, FoldedMeshIsFilledByTheWindingNumber) {
+  auto merged = [](const TriangleMesh& a, const TriangleMesh& b) {
+    TriangleMesh m = a;
+    const auto n = static_cast<std::int32_t>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
+    for (auto t : b.triangles) m.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});
+    return m;
+  };
+  const TriangleMesh a = make_box({0, 0, 0}, {20, 20, 20}, 0);
+  const TriangleMesh b = make_box({10, 5, 5}, {30, 15, 15}, 0);
+  EXPECT_FALSE(self_intersects(a));
+  EXPECT_FALSE(self_intersects(merged(a, make_box({40, 0, 0}, {50, 10, 10}, 0))));
+  EXPECT_TRUE(self_intersects(merged(a, b)));
+
+  const testing::TempDir dir;
+  testing::write_obj(merged(a, b), dir / "folded.obj");
+  const auto r = testing::run_spec(
+      "units: mm\nresolution: {voxel_size: 2.5, max_subdivision: 2}\nouter: {path: " +
+          (dir / "folded.obj").string() + ", unit: mm}\nmaterials: {table: {soft: " +
+          "{youngs_modulus: 1.0e4, poisson_ratio: 0.45, density: 1000}}}\n" +
+          "layers: [{material: soft}]\n",
+      dir / "folded.yaml");
+  EXPECT_NEAR(r.summary.tissue_volume * 1e9, 9000.0, 0.01 * 9000.0);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 
@@ -49,7 +50,7 @@ bool project(const postprocess::Camera& c, int w, int h, const Vec3d& p, double&
 void write_rig_picture(const std::string& path, const TriangleMesh& skin,
                        const Landmarks& landmarks, const std::vector<PictureMuscle>& muscles,
                        bool numbered_landmarks) {
-  const int legend = numbered_landmarks ? 300 : 0, w = 900, h = 1000;
+  const int legend = numbered_landmarks ? 490 : 0, w = 900, h = 1000;
   // Frame on the landmarks (the face), with a margin: the box of the landmarks widened by 25%.
   std::vector<float> box;
   Vec3d lo{1e30, 1e30, 1e30}, hi{-1e30, -1e30, -1e30};
@@ -117,9 +118,17 @@ void write_rig_picture(const std::string& path, const TriangleMesh& skin,
       const std::string label = std::to_string(i + 1);
       out.fill_rect(x + 6, y - 9, postprocess::text_width(label, 2) + 4, 18, {255, 255, 255});
       postprocess::draw_text(out, x + 8, y - 7, label, {160, 0, 0}, 2);
-      postprocess::draw_text(out, w + 10, 20 + static_cast<int>(i) * 24,
-                             std::to_string(i + 1) + " " + names[i], {0, 0, 0}, 2);
+      // Each point's x and y in mm beside its name: with the dots they scale the picture, so
+      // that a point in the wrong place can be moved by the right amount (docs/landmarks.md).
+      const Vec3d& p = landmarks.at(names[i]);
+      char xy[48];
+      std::snprintf(xy, sizeof xy, "%7.1f %7.1f", 1e3 * p.x, 1e3 * p.y);
+      const int row = 44 + static_cast<int>(i) * 24;
+      postprocess::draw_text(out, w + 10, row, std::to_string(i + 1) + " " + names[i], {0, 0, 0},
+                             2);
+      postprocess::draw_text(out, w + 10 + 23 * 12, row, xy, {0, 0, 0}, 2);
     }
+    postprocess::draw_text(out, w + 10 + 23 * 12, 20, "  X MM  Y MM", {0, 0, 0}, 2);
   }
   postprocess::write_png(path, out);
 }

@@ -1,9 +1,12 @@
-// sinew-rig SPEC -o DIR [--landmarks-png FILE] [--muscles-png FILE]
+// sinew-rig SPEC -o DIR [--landmarks-png FILE] [--muscles-png FILE] [--snap-landmarks FILE]
 // Builds the muscle rig of a voxelizer spec's `rig:` section (docs/faces.md) without voxelizing:
 // checks the landmarks and that each muscle lies in the tissue, writes every rig muscle as a
 // closed OBJ (mm) into DIR for a look in any 3D package, and prints each muscle's size and fibres.
-// --landmarks-png draws the skin from the front with the landmarks numbered and listed;
-// --muscles-png the muscles through a half-transparent skin (rig_picture.hpp).
+// --landmarks-png draws the skin from the front with the landmarks numbered and listed; it is
+// drawn before the checks, so that a first guess whose points are off the skin can be corrected
+// by eye (docs/landmarks.md); --muscles-png the muscles through a half-transparent skin
+// (rig_picture.hpp). --snap-landmarks FILE writes the spec's landmarks moved to their closest
+// points on the skin (in the spec's units) and builds the rig from FILE instead.
 // Any error: a message on stderr, exit code 1 (2 for command-line errors).
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -27,16 +30,41 @@ int main(int argc, char** argv) {
   std::string landmarks_png, muscles_png;
   app.add_option("--landmarks-png", landmarks_png, "PNG of the skin with the landmarks numbered");
   app.add_option("--muscles-png", muscles_png, "PNG of the muscles under a half-transparent skin");
+  std::string snap;
+  app.add_option("--snap-landmarks", snap,
+                 "write the landmarks moved onto the skin to this file and use them");
   CLI11_PARSE(app, argc, argv);
   return sinew::tool::run("sinew-rig", [&] {
     using namespace sinew::voxelizer;
     Spec spec = read_spec(spec_path);
     if (!spec.rig) throw sinew::ConfigError(spec_path, "rig", "the spec has no rig: section");
+    TriangleMesh skin = load_mesh_source(spec.outer);
+    clean_mesh(skin, spec.weld_tolerance);
+    Landmarks landmarks = read_landmarks(spec.rig->landmarks);
+    if (!snap.empty()) {
+      const Landmarks snapped = snap_landmarks(landmarks, skin);
+      for (const auto& name : landmark_names()) {
+        const double moved = norm(snapped.at(name) - landmarks.at(name));
+        if (moved > 5e-4) std::printf("snapped %-20s by %5.1f mm\n", name.c_str(), 1e3 * moved);
+      }
+      sinew::write_text_atomically(
+          snap,
+          landmarks_yaml(snapped, spec.units,
+                         {"sinew-rig --snap-landmarks: " + spec.rig->landmarks.string() +
+                              " moved to the closest points of the skin " + spec.outer.describe(),
+                          "check them on the --landmarks-png picture (docs/landmarks.md)"}));
+      std::printf("wrote %s (the rig below is built from it)\n", snap.c_str());
+      spec.rig->landmarks = snap;
+      landmarks = read_landmarks(snap);
+    }
+    // The landmarks' picture comes before the checks: it is how points off the skin are found.
+    if (!landmarks_png.empty()) write_rig_picture(landmarks_png, skin, landmarks, {}, true);
     const std::size_t own = spec.muscles.size();
     add_rig_muscles(spec);
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw sinew::IoError(dir, "", "cannot create the folder: " + ec.message());
+    std::vector<PictureMuscle> pm;
     for (std::size_t i = own; i < spec.muscles.size(); ++i) {
       const auto& m = spec.muscles[i];
       TriangleMesh mm = *m.mesh.generated;
@@ -50,17 +78,9 @@ int main(int argc, char** argv) {
                                                                       : "circumferential";
       std::printf("%-32s %8.0f mm^3  %6zu triangles  fibres %s  -> %s\n", m.name.c_str(),
                   d.enclosed_volume, mm.triangles.size(), fibres, path.string().c_str());
+      pm.push_back({m.name, m.mesh.generated.get()});
     }
-    if (!landmarks_png.empty() || !muscles_png.empty()) {
-      TriangleMesh skin = load_mesh_source(spec.outer);
-      clean_mesh(skin, spec.weld_tolerance);
-      const Landmarks landmarks = read_landmarks(spec.rig->landmarks);
-      std::vector<PictureMuscle> pm;
-      for (std::size_t i = own; i < spec.muscles.size(); ++i)
-        pm.push_back({spec.muscles[i].name, spec.muscles[i].mesh.generated.get()});
-      if (!landmarks_png.empty()) write_rig_picture(landmarks_png, skin, landmarks, {}, true);
-      if (!muscles_png.empty()) write_rig_picture(muscles_png, skin, landmarks, pm, false);
-    }
+    if (!muscles_png.empty()) write_rig_picture(muscles_png, skin, landmarks, pm, false);
     return sinew::tool::kExitOk;
   });
 }

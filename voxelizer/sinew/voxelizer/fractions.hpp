@@ -39,14 +39,15 @@
 namespace sinew::voxelizer {
 
 // Signed distance to a mesh, positive inside, with its gradient. Thread-safe.
-// Inside/outside: for a watertight mesh (closed, manifold, consistently and outward oriented) the
-// sign of (p - closest)·n with n the angle-weighted pseudonormal of the closest feature (face, edge
-// or vertex; Bærentzen & Aanæs 2005), which is exact there and cheaper; otherwise the generalized
-// winding number w >= 1/2.
+// Inside/outside: for a watertight mesh (closed, manifold, consistently and outward oriented, not
+// intersecting itself) the sign of (p - closest)·n with n the angle-weighted pseudonormal of the
+// closest feature (face, edge or vertex; Bærentzen & Aanæs 2005), which is exact there and
+// cheaper; otherwise the generalized winding number w >= 1/2.
 class SignedField {
  public:
   // watertight: the caller's verdict from clean_mesh (closed, no non-manifold or misoriented
-  // edges, positive enclosed volume). closed: no boundary edges.
+  // edges, positive enclosed volume) and self_intersects (false: self_intersection.hpp; a folded
+  // mesh passes clean_mesh's tests but not this one). closed: no boundary edges.
   SignedField(const TriangleMesh& mesh, bool watertight, bool closed);
   struct Sample {
     double value = 0;         // m, +dist inside, -dist outside

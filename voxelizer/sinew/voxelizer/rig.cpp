@@ -313,6 +313,13 @@ std::vector<std::pair<std::string, double>> landmark_distances(const Landmarks& 
   return d;
 }
 
+Landmarks snap_landmarks(const Landmarks& landmarks, const TriangleMesh& skin) {
+  const DistanceQuery q(skin);
+  Landmarks snapped = landmarks;
+  for (auto& [name, p] : snapped.points) p = q.closest(p).point;
+  return snapped;
+}
+
 void add_rig_muscles(Spec& spec) {
   if (!spec.rig) return;
   const RigSpec& rig = *spec.rig;

@@ -69,6 +69,11 @@ std::vector<RigMuscle> build_rig(const std::vector<RigRecipe>& recipes, const Tr
 std::vector<std::pair<std::string, double>> landmark_distances(const Landmarks& landmarks,
                                                                const TriangleMesh& skin);
 
+// The landmarks each moved to its closest point on `skin` (metres; the file, mesh and names kept):
+// a first guess picked off the skin (e.g. another head's file scaled to this one) put on it, to be
+// corrected by eye on sinew-rig's picture (sinew-rig --snap-landmarks, docs/landmarks.md).
+Landmarks snap_landmarks(const Landmarks& landmarks, const TriangleMesh& skin);
+
 // The spec's rig expanded: loads the landmarks and the skin (and the inner surface), checks every
 // landmark is within rig.landmark_tolerance of the skin (ConfigError naming each one that is not
 // and its distance), builds the muscles, checks that at least rig.min_inside of each lies in the

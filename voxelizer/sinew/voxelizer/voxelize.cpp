@@ -28,6 +28,7 @@
 #include "sinew/voxelizer/offset.hpp"
 #include "sinew/voxelizer/primitives.hpp"
 #include "sinew/voxelizer/rig.hpp"
+#include "sinew/voxelizer/self_intersection.hpp"
 
 namespace sinew::voxelizer {
 
@@ -280,8 +281,17 @@ class Pipeline {
 
   void make_field(LoadedMesh& m) {
     const auto& d = m.diagnostics;
-    const bool watertight = d.closed && d.non_manifold_edges == 0 &&
-                            d.inconsistently_oriented_edges == 0 && d.enclosed_volume > 0;
+    bool watertight = d.closed && d.non_manifold_edges == 0 &&
+                      d.inconsistently_oriented_edges == 0 && d.enclosed_volume > 0;
+    // A mesh folded over itself passes the tests above, but the pseudonormal sign is wrong near
+    // the fold (whole blocks of voxels can be filled): the winding number decides there. The rig's
+    // sheets fold where the skin is more curved than their depth (the Lee Perry-Smith scan's
+    // frontalis above the nose).
+    if (watertight && self_intersects(m.mesh)) {
+      watertight = false;
+      warn("mesh " + m.mesh.source +
+           " intersects itself: inside and outside by the generalized winding number");
+    }
     m.field = std::make_unique<SignedField>(m.mesh, watertight, d.boundary_edges == 0);
   }
 
