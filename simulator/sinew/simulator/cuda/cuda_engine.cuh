@@ -123,7 +123,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   void destroy_graphs() {
     for (GraphSet* set : {&graphs_, &inline_graphs_}) {
       for (cudaGraphExec_t g : set->shorter)
-        if (g) cudaGraphExecDestroy(g);
+        if (g) cudaGraphExecDestroy(g);  // null: never used
       set->shorter.clear();
       if (set->batch) cudaGraphExecDestroy(set->batch);
       set->batch = nullptr;
@@ -132,13 +132,14 @@ class CudaEngine final : public Backend, public CudaTiming {
   // Graphs of batch_ steps and of 3 · 2^j < batch_ steps (the stretches shorter than a batch
   // between a run's outputs, or up to the next batch_align_ step: 72 steps are 48 + 24).
   struct GraphSet {
+    bool ahead = true;  // the sliding lists refreshed ahead (capture_steps)
     cudaGraphExec_t batch = nullptr;
-    std::vector<cudaGraphExec_t> shorter;  // 3 · 2^j steps
+    std::vector<cudaGraphExec_t> shorter;  // 3 · 2^j steps; captured at their first use (null)
   };
   GraphSet capture_graph_set(bool ahead);
   // Queues steps from step_ to chunk_end: these graphs at steps ≡ 0 mod 3, single launches before
   // and after; true when a graph ran. read_status: the status flags after the queued work (syncs).
-  bool queue_steps(std::int64_t chunk_end, const GraphSet& graphs);
+  bool queue_steps(std::int64_t chunk_end, GraphSet& graphs);
   StepStatus read_status();
   // After a force slot changed in the core: the program uploaded again (all of it when the slot's
   // nodes changed, then the graphs recaptured; else only the per-set forces, in place).

@@ -263,9 +263,12 @@ cudaGraphExec_t CudaEngine<T>::capture_steps(int count, bool ahead, bool reads_f
 // launches: with one short graph of 30 steps, 60% of the 1 mm brow raise's steps were single).
 template <typename T>
 typename CudaEngine<T>::GraphSet CudaEngine<T>::capture_graph_set(bool ahead) {
+  // The shorter graphs at their first use: a run without outputs between batches (a sweep's) needs
+  // few of them, and captures of engines in several threads take turns (capture_mutex).
   GraphSet set;
+  set.ahead = ahead;
   set.batch = capture_steps(batch_, ahead, batch_reads_flags_);
-  for (int len = 3; len < batch_; len *= 2) set.shorter.push_back(capture_steps(len, ahead, true));
+  for (int len = 3; len < batch_; len *= 2) set.shorter.push_back(nullptr);
   return set;
 }
 
@@ -399,7 +402,7 @@ void CudaEngine<T>::step(std::int64_t n) {
 }
 
 template <typename T>
-bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, const GraphSet& set) {
+bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, GraphSet& set) {
   bool graphs = false;
   while (step_ < chunk_end) {
     const std::int64_t left = chunk_end - step_;
@@ -415,6 +418,8 @@ bool CudaEngine<T>::queue_steps(std::int64_t chunk_end, const GraphSet& set) {
       for (std::size_t j = set.shorter.size(); j-- > 0 && !graph;)
         if (room >= (std::int64_t(3) << j)) {
           len = 3 << j;
+          // Captured beside the queued steps (a capture records, it does not wait for them).
+          if (!set.shorter[j]) set.shorter[j] = capture_steps(len, set.ahead, true);
           graph = set.shorter[j];
         }
     }
