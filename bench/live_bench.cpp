@@ -4,8 +4,10 @@
 //  1. batch: the engine of the live plan stepped alone (preferred step counts) for --seconds, the
 //     scene's own curves; the restores at the scene's end are not timed;
 //  2. live: the same engine in a Session behind the Server, a WebSocket client receiving every
-//     frame (--frame-rate), for --seconds. The client steers like a user: every 100 ms it moves
-//     the first muscle's slider, alternating between its curve's peak and half of it (inside the
+//     frame (--frame-rate), for --seconds. The client steers like a user: every 100 ms of wall
+//     time, and no sooner than --slider-sim-period of simulated time since its last move (a user
+//     watching a slow model moves the slider as slowly in the model's time), it moves the first
+//     muscle's slider, alternating between its curve's peak and half of it (inside the
 //     activation range the scene itself plans for: the live plan would accept up to 1, but one
 //     muscle held above its scene's peak long past the scene's end inverted an element of the
 //     1 mm forehead, and the bench measures speed, not how far the model can be pushed), and
@@ -18,7 +20,7 @@
 // An instability in either part stops the bench with the engine's message (exit status 3).
 //
 //   live_bench SCENE [--device cpu|cuda|auto] [--precision float|double] [--seconds S]
-//              [--frame-rate F] [--threads N]
+//              [--frame-rate F] [--slider-sim-period S] [--threads N]
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
@@ -70,7 +72,7 @@ int main(int argc, char** argv) {
   CLI::App app{"live_bench: sinew-live's speed against the batch engine, and steering latency"};
   simulator::RunOptions opt;
   std::string precision;
-  double seconds = 20, frame_rate = 30;
+  double seconds = 20, frame_rate = 30, slider_sim_period = 0.02;
   app.add_option("scene", opt.scene_path, "Scene file")->required()->check(CLI::ExistingFile);
   app.add_option("--device", opt.device, "cpu, cuda or auto")->default_val("auto");
   app.add_option("--precision", precision, "float or double (default: the scene's)")
@@ -81,6 +83,12 @@ int main(int argc, char** argv) {
   app.add_option("--frame-rate", frame_rate, "Frames per second streamed")
       ->default_val(30)
       ->check(CLI::PositiveNumber);
+  app.add_option("--slider-sim-period", slider_sim_period,
+                 "Simulated seconds at least between slider moves (0: every 100 ms of wall time; "
+                 "at 0.5 mm a move every 100 ms of wall time is a step every 2-3 ms of the "
+                 "model's time, which inverts elements)")
+      ->default_val(0.02)
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--threads", opt.threads, "OpenMP threads of the CPU backend");
   CLI11_PARSE(app, argc, argv);
   if (!precision.empty())
@@ -150,6 +158,7 @@ int main(int argc, char** argv) {
     std::vector<double> latency, reset_latency;
     std::uint32_t last_seen = 0, pending_reset = 0;
     double max_time = 0;
+    std::atomic<double> shown_time{0};  // the latest frame's scene time
     std::atomic<std::int64_t> frames{0};
     std::atomic<bool> done{false}, want_reset{false};
     std::thread reader([&] {
@@ -175,6 +184,7 @@ int main(int argc, char** argv) {
               last_seen = h[3];
             }
             max_time = std::max(max_time, time);
+            shown_time = time;
             // Past the scene's end and no reset on its way: replay the scene.
             if (time >= duration && pending_reset <= last_seen) want_reset = true;
           }
@@ -199,14 +209,19 @@ int main(int argc, char** argv) {
     const auto t0 = Clock::now();
     auto next_slider = t0;
     int slider = 0;
+    double last_move_time = -1e300;  // scene time of the last slider move
     std::string error;
     while (since(t0) < seconds) {
       if (want_reset.exchange(false)) send(R"("type": "reset")", true);
-      if (!muscle.empty() && Clock::now() >= next_slider) {
+      const double shown = shown_time;
+      if (shown < last_move_time) last_move_time = -1e300;  // a reset went back to step 0
+      if (!muscle.empty() && Clock::now() >= next_slider &&
+          shown - last_move_time >= slider_sim_period) {
+        last_move_time = shown;
         send(fmt::format(R"("type": "activation", "muscle": "{}", "value": {:.17g})", muscle,
                          slider++ % 2 ? 0.5 * peak : peak),
              false);
-        next_slider += std::chrono::milliseconds(100);
+        next_slider = Clock::now() + std::chrono::milliseconds(100);
       }
       error = session.last_error();
       if (!error.empty()) break;
