@@ -96,14 +96,34 @@ TEST(LiveProtocol, FrameLayoutIsAsDocumented) {
   EXPECT_EQ(last, 8.0f);
 }
 
-// The activation BackendCore gives at step n: the override in force, else the clamped curve.
+// The activation BackendCore gives at step n (its header's law, restated): the scene's clamped
+// curve until the first change; each change ramps linearly over 0.03 s of steps from the value its
+// step had to its target (or to the curve's value), then holds it.
 double live_value(const simulator::Curve& c, const std::vector<ActivationChange>& changes,
                   std::int64_t n, double dt, double s) {
-  std::optional<double> o;
-  for (const auto& ch : changes)
-    if (ch.step <= n) o = ch.value;
-  if (o) return *o;
-  return c.points.empty() ? 0.0 : std::clamp(c.at((double(n) * dt) / s), 0.0, 1.0);
+  const auto curve = [&](std::int64_t m) {
+    return c.points.empty() ? 0.0 : std::clamp(c.at((double(m) * dt) / s), 0.0, 1.0);
+  };
+  const std::int64_t ramp = std::max<std::int64_t>(1, std::llround(0.03 / dt));
+  bool scene = true;
+  std::optional<double> target;
+  double from = 0;
+  std::int64_t start = 0;
+  const auto at = [&](std::int64_t m) {
+    if (scene) return curve(m);
+    const double to = target ? *target : curve(m);
+    if (m >= start + ramp) return to;
+    return from + (to - from) * (double(m - start) / double(ramp));
+  };
+  for (const auto& ch : changes) {
+    if (ch.step > n) break;
+    const double f = at(ch.step);
+    scene = false;
+    target = ch.value;
+    from = f;
+    start = ch.step;
+  }
+  return at(n);
 }
 
 TEST(LiveReproduce, ActivationCurveGivesEveryStepsValueExactly) {

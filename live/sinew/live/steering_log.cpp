@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "sinew/common/yaml_reader.hpp"
+#include "sinew/simulator/backend_core.hpp"
 
 namespace sinew::live {
 
@@ -95,26 +96,49 @@ void add_original(std::vector<std::array<double, 2>>& k, const simulator::Curve&
 std::vector<std::array<double, 2>> reproduce_activation(
     const simulator::Curve& original, const std::vector<ActivationChange>& changes, double dt,
     double s, std::int64_t end_step) {
-  // Phases: [start, next start) with an override value or the scene curve (none).
-  std::vector<std::pair<std::int64_t, std::optional<double>>> phases{{0, std::nullopt}};
+  // Phases from their first step: the scene curve (phase 0), then each change: a ramp from the
+  // value its step had to its target (or to the curve), as BackendCore sets and evaluates it.
+  struct Phase {
+    std::int64_t start;
+    std::optional<double> target;
+    double from;
+  };
+  const std::int64_t ramp = simulator::BackendCore::override_ramp_steps(dt);
+  const auto curve_at = [&](std::int64_t n) { return curve_value(original, knot_time(n, dt, s)); };
+  const auto value = [&](const Phase& p, std::int64_t n, bool scene) {
+    if (scene) return curve_at(n);
+    return simulator::BackendCore::ramped_activation(p.from, p.target ? *p.target : curve_at(n),
+                                                     p.start, ramp, n);
+  };
+  std::vector<Phase> phases{{0, std::nullopt, 0.0}};
   for (const auto& c : changes) {
     if (c.step > end_step) break;
-    if (phases.back().first == c.step)
-      phases.back().second = c.value;
+    const double from = value(phases.back(), c.step, phases.size() == 1);
+    if (phases.size() > 1 && phases.back().start == c.step)
+      phases.back().target = c.value;  // the later change of one step wins; its ramp starts the same
     else
-      phases.emplace_back(c.step, c.value);
+      phases.push_back({c.step, c.value, from});
   }
   std::vector<std::array<double, 2>> k;
   for (std::size_t i = 0; i < phases.size(); ++i) {
-    const std::int64_t a = phases[i].first;
+    const std::int64_t a = phases[i].start;
     const bool last = i + 1 == phases.size();
-    const std::int64_t b = last ? end_step : phases[i + 1].first - 1;
-    if (phases[i].second) {
-      const double v = *phases[i].second;
-      k.push_back({knot_time(a, dt, s), v});
-      if (b > a) k.push_back({knot_time(b, dt, s), v});
+    const std::int64_t b = last ? end_step : phases[i + 1].start - 1;
+    if (i == 0) {
+      add_original(k, original, a, b, dt, s, true, last);
+      continue;
+    }
+    // The ramp: a knot per step (each step's value exactly); then the target held, or the curve.
+    const std::int64_t ramp_end = std::min(b, a + ramp - 1);
+    for (std::int64_t n = a; n <= ramp_end; ++n)
+      k.push_back({knot_time(n, dt, s), value(phases[i], n, false)});
+    if (ramp_end >= b) continue;
+    if (phases[i].target) {
+      const double v = *phases[i].target;
+      k.push_back({knot_time(ramp_end + 1, dt, s), v});
+      if (b > ramp_end + 1) k.push_back({knot_time(b, dt, s), v});
     } else {
-      add_original(k, original, a, b, dt, s, a == 0, last);
+      add_original(k, original, ramp_end + 1, b, dt, s, false, last);
     }
   }
   // Knots must increase strictly: an original knot may coincide with a step's knot.

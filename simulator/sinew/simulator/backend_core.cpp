@@ -295,20 +295,34 @@ std::size_t BackendCore::step_scalar_count() const {
       1, muscle_count() + prepared_.forces.size() + prepared_.prescribed.size());
 }
 
+double BackendCore::curve_activation(std::size_t m, double t) const {
+  return m < setup_.activation.size() && !setup_.activation[m].points.empty()
+             ? std::clamp(setup_.activation[m].at(curve_time(t)), 0.0, 1.0)
+             : 0.0;
+}
+
+double BackendCore::activation_value(std::size_t m, std::int64_t step) const {
+  const double curve = curve_activation(m, time(step));
+  if (m >= activation_override_.size() || !activation_override_[m]) return curve;
+  const ActivationOverride& o = *activation_override_[m];
+  return ramped_activation(o.from, o.target ? *o.target : curve, o.start, o.ramp, step);
+}
+
 template <typename T>
 void BackendCore::activations(double t, T* out) const {
+  // Times of steps (time(n) = n Δt): the override's ramp counts steps.
+  const std::int64_t step = plan_.dt > 0 ? std::llround(t / plan_.dt) : 0;
   for (std::size_t m = 0; m < muscle_count(); ++m) {
     if (m < activation_override_.size() && activation_override_[m]) {
-      out[m] = T(*activation_override_[m]);
+      out[m] = T(activation_value(m, step));
       continue;
     }
-    out[m] = m < setup_.activation.size() && !setup_.activation[m].points.empty()
-                 ? T(std::clamp(setup_.activation[m].at(curve_time(t)), 0.0, 1.0))
-                 : T(0);
+    out[m] = T(curve_activation(m, t));
   }
 }
 
-void BackendCore::set_activation_override(std::size_t m, std::optional<double> a) {
+void BackendCore::set_activation_override(std::size_t m, std::optional<double> a,
+                                          std::int64_t step) {
   if (m >= muscle_count())
     throw ConfigError(
         "", "activation",
@@ -323,13 +337,21 @@ void BackendCore::set_activation_override(std::size_t m, std::optional<double> a
                                   "its own plan)",
                                   *a, setup_.max_activation(m)));
   activation_override_.resize(muscle_count());
+  auto& o = activation_override_[m];
+  if (!a && !o) return;  // on the curve already
+  ActivationOverride next;
   // Clamped as the curves are; + 0.0 turns −0 into +0 (the curve of a reproduced scene gives +0).
-  activation_override_[m] =
-      a ? std::optional<double>(std::clamp(*a, 0.0, 1.0) + 0.0) : std::nullopt;
+  if (a) next.target = std::clamp(*a, 0.0, 1.0) + 0.0;
+  next.from = activation_value(m, step);
+  next.start = step;
+  next.ramp = o && step < o->start ? 0 : override_ramp_steps(plan_.dt);
+  o = next;
 }
 
 std::optional<double> BackendCore::activation_override(std::size_t m) const {
-  return m < activation_override_.size() ? activation_override_[m] : std::nullopt;
+  return m < activation_override_.size() && activation_override_[m]
+             ? activation_override_[m]->target
+             : std::nullopt;
 }
 
 void BackendCore::set_force_slot(std::size_t k, std::vector<Index> nodes,

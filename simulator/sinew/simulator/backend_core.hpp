@@ -11,7 +11,9 @@
 //    element fields.
 // The one order of loads and constraints is the constraint program (passes/constraint_program.hpp)
 // built here.
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -153,12 +155,29 @@ class BackendCore {
 
   // Steering (sinew-live, docs/live.md): changes between steps, read by step_scalars, so both
   // engines see them from their next step() call. The plan is never rebuilt.
-  // Activation override of muscle m (model order): a ∈ [0, 1] replaces the curve's value from the
-  // next step; nullopt returns to the curve. Throws ConfigError for m out of range, a not finite,
-  // or a above Setup::max_activation(m) (the time step was planned for that; a live run sets
-  // Setup::activation_overrides, which makes it 1).
-  void set_activation_override(std::size_t m, std::optional<double> a);
-  std::optional<double> activation_override(std::size_t m) const;
+  // Activation override of muscle m (model order), set between steps at step `step`: from there
+  // the activation ramps linearly, over override_ramp_steps(Δt) steps (kOverrideRampSeconds of
+  // simulated time), from the value step `step` had to a ∈ [0, 1], or to the curve's value
+  // (nullopt, back to the curve); ramped_activation gives step n's value. An instant jump, e.g.
+  // from 0.05 early in a scene's ramp to its peak, inverted elements of the 0.5 mm forehead beside
+  // its sliding scalp in float and double (docs/performance.md, "Live"); a muscle takes tens of
+  // ms to activate. A step before the current override's (a restore went back) sets it at once.
+  // Throws ConfigError for m out of range, a not finite, or a above Setup::max_activation(m) (the
+  // time step was planned for that; a live run sets Setup::activation_overrides, which makes it 1).
+  void set_activation_override(std::size_t m, std::optional<double> a, std::int64_t step);
+  std::optional<double> activation_override(std::size_t m) const;  // the target, if any
+  static constexpr double kOverrideRampSeconds = 0.03;
+  static std::int64_t override_ramp_steps(double dt) {
+    return std::max<std::int64_t>(1, std::llround(kOverrideRampSeconds / dt));
+  }
+  // Step n's activation under an override set at step `start` with this ramp (steps), from
+  // `from` to `target`: target from start + ramp on, else from + (target − from) (n − start) /
+  // ramp. The live reproduction (live/steering_log.cpp) evaluates its steps with this too.
+  static double ramped_activation(double from, double target, std::int64_t start,
+                                  std::int64_t ramp, std::int64_t n) {
+    if (n >= start + ramp || n < start) return target;
+    return from + (target - from) * (double(n - start) / double(ramp));
+  }
   // Live force slots (Setup::force_slots): force sets after the scene's. set_force_slot gives slot
   // k these nodes (ids checked) and per-node force (N, finite), factor 1; clear_force_slot empties
   // it (factor 0). The engine must then rebuild its constraint program (make_constraint_program).
@@ -236,7 +255,14 @@ class BackendCore {
   PreparedModel prepared_;
   std::vector<Index> model_rigid_;  // the model's rigid nodes, for the stop messages
   std::size_t muscle_count_ = 0;
-  std::vector<std::optional<double>> activation_override_;  // per muscle (empty: none set)
+  struct ActivationOverride {
+    std::optional<double> target;  // none: back to the curve
+    double from = 0;               // the activation of step `start` before the change
+    std::int64_t start = 0, ramp = 0;
+  };
+  std::vector<std::optional<ActivationOverride>> activation_override_;  // per muscle
+  double curve_activation(std::size_t m, double t) const;               // the scene's, clamped
+  double activation_value(std::size_t m, std::int64_t step) const;      // with the override
   std::size_t force_slots_ = 0;                             // the last entries of prepared_.forces
   // J, ε · volume · min modulus (the strain energy's round-off) + ½ · total mass · (ε · max |x| /
   // Δt)² (the kinetic energy of positions moving by their own round-off each step); docs/physics.md

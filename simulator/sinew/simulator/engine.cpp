@@ -86,7 +86,7 @@ class CpuEngine final : public Backend {
     return core_.element_fields(a_, u_.data(), step_, threads_);
   }
   void set_activation_override(std::size_t m, std::optional<double> a) override {
-    core_.set_activation_override(m, a);
+    core_.set_activation_override(m, a, step_);
     forces_valid_ = energy_valid_ = false;  // forces at u(n) depend on the activation
   }
   std::optional<double> activation_override(std::size_t m) const override {

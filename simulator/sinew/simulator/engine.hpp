@@ -95,7 +95,8 @@ class Backend {
   virtual ElementFields element_fields() = 0;
 
   // Steering between steps (sinew-live, docs/live.md; BackendCore): from the next step() call.
-  // Activation override of muscle m (nullopt: back to its curve). Throws ConfigError.
+  // Activation override of muscle m (nullopt: back to its curve), reached over a ramp of
+  // BackendCore::kOverrideRampSeconds from the current step. Throws ConfigError.
   virtual void set_activation_override(std::size_t m, std::optional<double> a) = 0;
   virtual std::optional<double> activation_override(std::size_t m) const = 0;
   // Live force slot k (Setup::force_slots): these nodes each get `force` (N) until cleared.

@@ -62,7 +62,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   ElementFields element_fields() override;
   // Steering (docs/live.md): activation overrides reach the rows step() stages from the core.
   void set_activation_override(std::size_t m, std::optional<double> a) override {
-    core_.set_activation_override(m, a);
+    core_.set_activation_override(m, a, step_);
   }
   std::optional<double> activation_override(std::size_t m) const override {
     return core_.activation_override(m);
