@@ -22,7 +22,7 @@ double knot_time(std::int64_t n, double dt, double s) {
 
 // The value BackendCore gives a muscle on its scene curve at step n (before T(·)).
 double curve_value(const simulator::Curve& c, double t) {
-  return c.points.empty() ? 0.0 : std::clamp(c.at(t), 0.0, 1.0);
+  return simulator::BackendCore::clamped_activation(c, t);
 }
 
 // Appends knots so that steps [a, b] evaluate exactly as `c` does. first: nothing before step a

@@ -296,9 +296,8 @@ std::size_t BackendCore::step_scalar_count() const {
 }
 
 double BackendCore::curve_activation(std::size_t m, double t) const {
-  return m < setup_.activation.size() && !setup_.activation[m].points.empty()
-             ? std::clamp(setup_.activation[m].at(curve_time(t)), 0.0, 1.0)
-             : 0.0;
+  return m < setup_.activation.size() ? clamped_activation(setup_.activation[m], curve_time(t))
+                                      : 0.0;
 }
 
 double BackendCore::activation_value(std::size_t m, std::int64_t step) const {

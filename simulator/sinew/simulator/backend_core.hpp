@@ -170,6 +170,10 @@ class BackendCore {
   static std::int64_t override_ramp_steps(double dt) {
     return std::max<std::int64_t>(1, std::llround(kOverrideRampSeconds / dt));
   }
+  // A scene curve's activation at curve time t: clamped to [0, 1]; 0 for an empty curve.
+  static double clamped_activation(const Curve& c, double t) {
+    return c.points.empty() ? 0.0 : std::clamp(c.at(t), 0.0, 1.0);
+  }
   // Step n's activation under an override set at step `start` with this ramp (steps), from
   // `from` to `target`: target from start + ramp on, else from + (target − from) (n − start) /
   // ramp. The live reproduction (live/steering_log.cpp) evaluates its steps with this too.
