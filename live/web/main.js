@@ -113,6 +113,7 @@ function applyFrame(buf) {
   g.attributes.position.needsUpdate = true;
   g.attributes.color.needsUpdate = true;
   g.computeVertexNormals();
+  g.computeBoundingSphere();  // the raycaster's first test: a pick beyond the rest shape would miss
   const [label, scale, unit] = units[field];
   $('bar_max').textContent = `${(hi * scale).toPrecision(3)} ${unit}`;
   $('bar_min').textContent = `${(lo * scale).toPrecision(3)} ${unit}`;
@@ -248,7 +249,7 @@ const ring = new THREE.Mesh(new THREE.RingGeometry(0.95, 1, 48),
                             new THREE.MeshBasicMaterial({ color: 0xffaa00, side: THREE.DoubleSide }));
 ring.visible = false;
 scene.add(ring);
-let drag = null, lastDragSent = 0;
+let drag = null, lastDragSent = 0, trailingDrag = 0;
 function pick(ev) {
   const r = renderer.domElement.getBoundingClientRect();
   pointer.set(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
@@ -284,11 +285,16 @@ renderer.domElement.addEventListener('pointermove', (ev) => {
   if (!drag) return;
   pick(ev);
   raycaster.ray.intersectPlane(drag.plane, drag.target);
-  const now = performance.now();
-  if (now - lastDragSent > 50) { sendDrag(dragForce()); lastDragSent = now; }
+  // At most one drag message per 50 ms, and the last position always sent (a trailing send), so
+  // the force matches where the mouse came to rest.
+  clearTimeout(trailingDrag);
+  const wait = 50 - (performance.now() - lastDragSent);
+  const sendNow = () => { if (drag) { sendDrag(dragForce()); lastDragSent = performance.now(); } };
+  if (wait <= 0) sendNow(); else trailingDrag = setTimeout(sendNow, wait);
 });
 window.addEventListener('pointerup', () => {
   if (!drag) return;
+  clearTimeout(trailingDrag);
   send({ type: 'release' });
   drag = null;
   ring.visible = false;

@@ -40,6 +40,14 @@ const run = (cmd, args) => {
   return r.stdout;
 };
 run(env.LIVE_TEST_MODEL, [work]);
+// The test scene lasts 2 s, 20 s of wall time at --speed 0.1: a slow or loaded machine (browser
+// start, swiftshader) reached its end, paused there, before the drag (seen in CI). A minute of
+// scene keeps the engine running through every step below.
+{
+  const scene = path.join(work, 'live_box.yaml'), text = fs.readFileSync(scene, 'utf8');
+  if (!/^duration: 2\.0$/m.test(text)) fail(`live_box.yaml has no 'duration: 2.0' line:\n${text}`);
+  fs.writeFileSync(scene, text.replace(/^duration: 2\.0$/m, 'duration: 60.0'));
+}
 
 // With an access token (as any non-loopback bind has): the page, its scripts and three.js load by
 // the URL's ?token= and the cookie the server sets.
@@ -89,6 +97,17 @@ try {
   await waitFor(`${freeEndDx} < ${before - 2e-4}`, 'the slider to contract the muscle');
   const after = await live(freeEndDx);
   check(after < before - 2e-4, `the slider contracts the muscle (free end x: ${before} -> ${after} m)`);
+  // Let the contraction settle before picking a point 1 mm from the free end: on a loaded machine
+  // the end moved on by millimetres between reading its position and pressing the mouse, and the
+  // press missed the skin (seen in CI).
+  let settled = false;
+  for (let k = 0, last = after; k < 100 && !settled; ++k) {
+    await sleep(300);
+    const now = await live(freeEndDx);
+    settled = Math.abs(now - last) < 1e-5;
+    last = now;
+  }
+  check(settled, 'the contraction settles');
 
   // Drag the top of the free end upwards on the screen: the picked region rises (z).
   const topZ = `(() => { const L = window.sinewLive, r = L.rest(), d = L.displacement;
