@@ -96,7 +96,8 @@ int main(int argc, char** argv) {
       throw IoError(web, "", "the page's folder has no index.html (--web)");
     if (!std::filesystem::is_regular_file(std::filesystem::path(three) / "build/three.module.js"))
       throw IoError(three, "",
-                    "three.js is not installed there: run scripts/install-deps (--three)");
+                    "three.js is not installed there: run scripts/install-deps (it puts three.js "
+                    "into .cache/three), or point --three at a three.js package folder");
     // The live run plans as sinew-simulate does, with its steering (make_live_setup).
     auto run = simulator::load_run(
         opt, so.play.empty() ? live::make_live_setup : live::make_playback_setup);

@@ -20,6 +20,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -301,6 +302,27 @@ TEST_F(LiveServer, TokenIsCheckedOnEveryRequest) {
   EXPECT_THROW(Client c(port_, "/ws?token=bad"), beast::system_error);
   Client ok(port_, "/ws?token=s3cret-token");
   EXPECT_EQ(ok.next("hello")["protocol"], kProtocolVersion);
+}
+
+TEST(LiveTool, MissingThreeJsSaysHowToInstallIt) {
+  // scripts/install-deps has no --three option: the message names the script and sinew-live's
+  // own --three separately, so that neither is mistaken for the other.
+  TempDir dir("live_tool_three");
+  testing::write_live_case(dir.str());
+  const std::string log = dir / "out.txt", empty = dir / "no_three";
+  std::filesystem::create_directories(empty);
+  const std::string cmd = std::string("'") + SINEW_LIVE_TOOL + "' '" + (dir / "live_box.yaml") +
+                          "' --device cpu --port 0 --three '" + empty + "' > '" + log + "' 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  const std::string out = simulator::testing::read_file(log);
+  EXPECT_NE(out.find(empty + ": three.js is not installed there: run scripts/install-deps (it puts "
+                             "three.js into .cache/three), or point --three at a three.js "
+                             "package folder"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("install-deps (--three)"), std::string::npos) << out;
 }
 
 TEST(LiveTool, CtrlCWhileRecordingLeavesAReadableResultsFile) {
