@@ -193,9 +193,12 @@ int main(int argc, char** argv) {
     const bool have_magick = !gif.empty() && !have_ffmpeg && imagemagick_available();
     if (!gif.empty() && !have_ffmpeg && !have_magick) {
       throw ResourceError("", "--gif",
-                          "unavailable: neither ffmpeg nor ImageMagick's convert is "
-                          "on PATH (write --sequence DIR and encode the PNGs "
-                          "elsewhere)");
+                          std::string("unavailable: ffmpeg is not on PATH and ") +
+                              (on_path("convert")
+                                   ? "the `convert` on PATH is not ImageMagick's (its -version "
+                                     "does not begin with \"Version: ImageMagick\")"
+                                   : "neither is ImageMagick's convert") +
+                              " (write --sequence DIR and encode the PNGs elsewhere)");
     }
     FrameRenderSettings s;
     set_view(s);

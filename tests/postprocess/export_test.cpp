@@ -581,6 +581,33 @@ TEST(ExportTools, RenderAndExportAResultsFile) {
   EXPECT_TRUE(fs::exists(dir / "objs" / "frame_0004.obj"));
   EXPECT_NE(run_export(results + " --pc2 " + (dir / "b.pc2").string()), 0);
 }
+
+// --gif without ffmpeg: a `convert` on PATH that is not ImageMagick's is named as such, not called
+// missing (a stand-in `convert` made the old message "neither ... is on PATH" untrue).
+TEST(ExportTools, GifWithoutAnEncoderSaysWhichToolIsWrong) {
+  const auto dir = temp_dir("gif_encoder");
+  const auto results = (dir / "results.h5").string();
+  write_results(results, stretching_sphere(2));
+  fs::create_directories(dir / "bin");
+  const auto fake = dir / "bin" / "convert";
+  std::ofstream(fake) << "#!/bin/sh\necho 'Version: not an image tool'\n";
+  fs::permissions(fake, fs::perms::owner_all);
+  const auto log = (dir / "log.txt").string();
+  auto gif = [&](const std::string& path) {
+    const std::string cmd = "PATH='" + path + "' " + SINEW_RENDER_EXE + " " + results +
+                            " --gif " + (dir / "a.gif").string() + " > " + log + " 2>&1";
+    return std::system(cmd.c_str());
+  };
+  auto text = [&] {
+    std::ifstream in(log);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_NE(gif((dir / "bin").string()), 0);
+  EXPECT_NE(text().find("is not ImageMagick's"), std::string::npos) << text();
+  EXPECT_FALSE(fs::exists(dir / "a.gif"));
+  EXPECT_NE(gif((dir / "empty").string()), 0);
+  EXPECT_NE(text().find("neither is ImageMagick's convert"), std::string::npos) << text();
+}
 #endif
 
 }  // namespace
