@@ -192,7 +192,7 @@ TEST(YamlReader, ReadsTextFiles) {
     read_text_file("/nonexistent/x.yaml", "test file");
     FAIL() << "expected an IoError";
   } catch (const IoError& e) {
-    EXPECT_STREQ(e.what(), "/nonexistent/x.yaml: cannot open the test file");
+    EXPECT_STREQ(e.what(), "/nonexistent/x.yaml: cannot open the test file: No such file or directory");
   }
 }
 

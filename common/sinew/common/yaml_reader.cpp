@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include "sinew/common/input_file.hpp"
+
 namespace sinew {
 
 struct YamlNode::State {
@@ -300,6 +302,7 @@ YamlNode parse_yaml(const std::string& text, const std::string& file) {
 }
 
 std::string read_text_file(const std::filesystem::path& path, const std::string& what) {
+  require_regular_file(path, what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string(), "", "cannot open the " + what);
   std::stringstream ss;

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/yaml_reader.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/run_estimate.hpp"
@@ -83,13 +84,7 @@ std::unique_ptr<Backend> make_backend(bool cuda, const formats::Model& model, co
 
 }  // namespace
 
-std::string read_scene_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, "", "cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+std::string read_scene_text(const std::string& path) { return read_text_file(path, "scene file"); }
 
 LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>& adjust) {
   const auto start = std::chrono::steady_clock::now();
