@@ -10,9 +10,13 @@
 
 namespace sinew::simulator {
 
-// The step of event k for events every `interval` of scene time.
+// The step of event k for events every `interval` of scene time; the int64 maximum (never) when
+// that step is past 2^62, as for any k ≥ 1 with an interval of 1e308 s.
 inline std::int64_t event_step(std::int64_t k, double interval, double time_scaling, double dt) {
   const double x = double(k) * interval * time_scaling / dt;
+  // Casting an infinite or out-of-range double to int64 is undefined (INT64_MIN on x86, which made
+  // next_after() count k up for ever: scripts/fuzz_inputs.py found the hang).
+  if (!(x < 0x1p62)) return std::numeric_limits<std::int64_t>::max();
   return static_cast<std::int64_t>(std::ceil(x - 1e-9 * std::max(1.0, x)));
 }
 
