@@ -11,6 +11,7 @@ files), runs each tool on each variant under a timeout, and classifies every run
 
   error    nonzero exit with a one-line message that names the input file (the standard)
   vague    nonzero exit whose message does not name the file (reported, not a failure)
+  unstable exit 3: a run that blew up on a damaged but readable input (sinew-simulate, -sweep)
   ok       exit 0 (fine when the variant is still valid)
   crash    killed by a signal, an abort, "terminate called", a sanitizer report
   hang     still running at the timeout
@@ -26,7 +27,6 @@ import argparse
 import collections
 import copy
 import json
-import math
 import os
 import random
 import re
@@ -36,9 +36,13 @@ import subprocess
 import sys
 import time
 
-import h5py
-import numpy as np
-import yaml
+try:
+    import h5py
+    import numpy as np
+    import yaml
+except ImportError as e:  # ctest's fuzz_tool_inputs skips on 77 (install-deps installs them)
+    print(f"fuzz_inputs: skipped: {e} (python3-h5py and python3-yaml, scripts/install-deps)")
+    sys.exit(77)
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -596,7 +600,9 @@ def targets(build, with_voxelizer, live_three):
                     lambda b: [tool(b, "sweep", "sinew-sweep"), "sweep.yaml", "-o", "out",
                                "--threads", "1", "-q"], [],
                     extra=["scene.yaml", "model.h5"]))
-    if os.path.isdir(live_three):
+    if not os.path.isdir(live_three):
+        print(f"fuzz_inputs: live_play skipped: no three.js at {live_three} (install-deps)")
+    else:
         T.append(Target("live_play", "h5", "results.h5", "results.h5",
                         lambda b: [tool(b, "live", "sinew-live"), "--play", "results.h5",
                                    "--port", "0", "--three", live_three], [],
@@ -687,6 +693,8 @@ def run_one(target, build, run_dir, variant_file, timeout):
         cls = "crash"
     elif leftovers:
         cls = "partial"
+    elif rc == 3:
+        cls = "unstable"  # sinew-simulate's and sinew-sweep's status for a run that blew up
     elif rc != 0:
         bad = [o for o in target.outputs if os.path.exists(os.path.join(run_dir, o))]
         bad += [o for o in target.failure_keeps
