@@ -30,6 +30,7 @@ import json
 import os
 import random
 import re
+import resource
 import shutil
 import signal
 import subprocess
@@ -643,11 +644,21 @@ def valid_h5(path):
         return False
 
 
-def run_one(target, build, run_dir, variant_file, timeout):
+def memory_cap(gib):
+    """A limit on the tool's data segment, so that a reader filling memory (from /dev/zero, say)
+    fails there rather than pushing the machine into its OOM killer. None: no limit (sanitizer
+    builds reserve terabytes of shadow memory)."""
+    if not gib:
+        return None
+    limit = int(gib * 2**30)
+    return lambda: resource.setrlimit(resource.RLIMIT_DATA, (limit, limit))
+
+
+def run_one(target, build, run_dir, variant_file, timeout, memory_gib):
     argv = target.argv(build)
     start = time.time()
     proc = subprocess.Popen(argv, cwd=run_dir, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=memory_cap(memory_gib))
     out = b""
     hung = False
     if target.live:
@@ -718,6 +729,8 @@ def main():
     ap.add_argument("--seed", type=int, default=1, help="random seed of the mutations")
     ap.add_argument("--variants", type=int, default=40, help="variants per target")
     ap.add_argument("--timeout", type=float, default=20, help="seconds before a run is a hang")
+    ap.add_argument("--memory", type=float, default=4,
+                    help="GiB of data segment per tool run (RLIMIT_DATA; 0: none, for ASan)")
     ap.add_argument("--targets", default="", help="comma-separated target names (default all)")
     ap.add_argument("--no-voxelizer", action="store_true", help="skip sinew-rig/-voxelize")
     ap.add_argument("--no-specials", action="store_true",
@@ -764,7 +777,7 @@ def main():
             else:
                 label = make_yaml_variant(rng, seed_path, variant)
             cls, rc, elapsed, text = run_one(target, build, run_dir, target.variant_name,
-                                             args.timeout)
+                                             args.timeout, args.memory)
             counts[target.name][cls] += 1
             last = [l for l in text.strip().splitlines() if l.strip()][-1:] or [""]
             records.append({"target": target.name, "variant": i, "mutation": label, "class": cls,
