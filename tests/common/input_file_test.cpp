@@ -28,6 +28,14 @@ fs::path scratch(const std::string& name) {
   return dir;
 }
 
+// A folder holding a FIFO with no writer (pipe.yaml) and a link to /dev/zero (zero.yaml).
+fs::path scratch_with_pipe_and_device(const std::string& name) {
+  const auto dir = scratch(name);
+  EXPECT_EQ(::mkfifo((dir / "pipe.yaml").c_str(), 0600), 0);
+  fs::create_symlink("/dev/zero", dir / "zero.yaml");
+  return dir;
+}
+
 std::string io_error(const std::function<void()>& read) {
   try {
     read();
@@ -48,10 +56,8 @@ TEST(InputFile, AcceptsARegularFileAndALinkToOne) {
 }
 
 TEST(InputFile, RejectsAFolderAFifoADeviceAndAMissingFile) {
-  const auto dir = scratch("kinds");
+  const auto dir = scratch_with_pipe_and_device("kinds");
   const auto fifo = dir / "pipe.yaml";
-  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  fs::create_symlink("/dev/zero", dir / "zero.yaml");
   EXPECT_EQ(io_error([&] { require_regular_file(fifo, "scene file"); }),
             fifo.string() + ": the scene file is a FIFO (named pipe), not a regular file");
   EXPECT_EQ(io_error([&] { require_regular_file(dir, "model file"); }),
@@ -68,10 +74,8 @@ TEST(InputFile, RejectsAFolderAFifoADeviceAndAMissingFile) {
 // Without the check, reading the FIFO blocked for good (the test then ran into ctest's timeout)
 // and reading /dev/zero grew the string until memory ran out.
 TEST(InputFile, TextReaderNeitherBlocksOnAFifoNorReadsADeviceForEver) {
-  const auto dir = scratch("reader");
+  const auto dir = scratch_with_pipe_and_device("reader");
   const auto fifo = dir / "pipe.yaml";
-  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  fs::create_symlink("/dev/zero", dir / "zero.yaml");
   EXPECT_NE(io_error([&] { read_text_file(fifo, "scene file"); }).find("FIFO"), std::string::npos);
   EXPECT_NE(io_error([&] { read_text_file(dir / "zero.yaml", "scene file"); }).find("device"),
             std::string::npos);
