@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 
@@ -34,6 +35,28 @@ TEST(OutputSchedule, AnIntervalPastTheStepRangeHasNoFurtherEvents) {
   EXPECT_EQ(frames.next_after(0), 160);
   EXPECT_EQ(frames.next_after(159), 160);
   EXPECT_EQ(frames.next_after(160), kNever);
+}
+
+// An interval of 1e-308 s: the jump to the events of a step stopped at k = 2^62 and next_after()
+// counted k up for ever from there. Events at most a step apart fall on every step; checked
+// against counting k up one at a time for intervals of a quarter, 0.7 and one step.
+TEST(OutputSchedule, EventsAtMostAStepApartFallOnEveryStep) {
+  OutputSchedule tiny(1e-308, 1.0, 1.2e-5, 160, false);
+  EXPECT_EQ(tiny.next_after(0), 1);
+  EXPECT_EQ(tiny.next_after(41), 42);
+  EXPECT_EQ(tiny.next_after(159), 160);
+  EXPECT_EQ(tiny.next_after(160), kNever);
+  for (const double share : {0.25, 0.7, 1.0}) {
+    const double dt = 1.7e-5, interval = share * dt / 2.0;  // time_scaling 2
+    OutputSchedule schedule(interval, 2.0, dt, 300, false);
+    std::int64_t k = 0;
+    for (std::int64_t step = 0; step < 300; ++step) {
+      while (event_step(k, interval, 2.0, dt) <= step) ++k;
+      EXPECT_EQ(schedule.next_after(step),
+                std::min<std::int64_t>(event_step(k, interval, 2.0, dt), 300))
+          << "share " << share << ", step " << step;
+    }
+  }
 }
 
 }  // namespace

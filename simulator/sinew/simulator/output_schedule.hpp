@@ -36,6 +36,11 @@ class OutputSchedule {
     if (step >= last_) return std::numeric_limits<std::int64_t>::max();
     if (every_) return step + 1;
     if (!(interval_ > 0)) return last_;
+    // Events at most one step apart (interval · scaling ≤ Δt) fall on every step: the ceiling of a
+    // sequence rising by at most 1 takes every integer. Said outright because the jump below
+    // stops at k = 2^62, short of step · Δt / interval for an interval of 1e-308 s, from where
+    // counting k up one at a time never ended (scripts/fuzz_inputs.py).
+    if (interval_ * scaling_ <= dt_) return std::min(step + 1, last_);
     // Jump to the events of this step first: with an interval far below Δt, counting up one
     // event at a time would take interval/Δt iterations per step.
     const double first = std::min(double(step) * dt_ / (interval_ * scaling_), 0x1p62);
