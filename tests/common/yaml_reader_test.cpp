@@ -101,6 +101,25 @@ TEST(YamlReader, ErrorsNameFileKeyAndLine) {
   EXPECT_STREQ(absent.what(), "doc.yaml: missing: expected a number");
 }
 
+// yaml-cpp passes any byte on; a sweep title with invalid UTF-8 then made sinew-sweep end in an
+// untyped "[json.exception.type_error.316] invalid UTF-8 byte" naming no file (fuzz_inputs.py).
+TEST(YamlReader, TextThatIsNotUtf8IsRejectedWithItsLine) {
+  EXPECT_STREQ(config_error([] { parse_yaml("version: 1\ntitle: ab\x9c\n", "s.yaml"); }).what(),
+               "s.yaml: not UTF-8 text: byte 0x9C (line 2, column 10)");
+  EXPECT_NE(std::string(config_error([] { parse_yaml("t: \xc3\x28\n", "s.yaml"); }).what())
+                .find("byte 0xC3 (line 1, column 4)"),
+            std::string::npos);
+  // Overlong forms, surrogates and code points past U+10FFFF are not UTF-8 either.
+  for (const char* bad : {"t: \xc0\xaf", "t: \xed\xa0\x80", "t: \xf4\x90\x80\x80", "t: \xe2\x82"})
+    config_error([&] { parse_yaml(bad, "s.yaml"); });
+  // Multi-byte characters count as one column, and valid UTF-8 of every length passes.
+  EXPECT_EQ(parse_yaml("t: \"\xc3\xa9\xe2\x80\xae\xf0\x9f\x98\x80\"\n", "s.yaml").child("t").text(),
+            "\xc3\xa9\xe2\x80\xae\xf0\x9f\x98\x80");
+  EXPECT_NE(std::string(config_error([] { parse_yaml("t: \xc3\xa9\xff", "s.yaml"); }).what())
+                .find("(line 1, column 5)"),
+            std::string::npos);
+}
+
 TEST(YamlReader, UnknownKeysAreRejectedAtTheKey) {
   const YamlNode root = parse_yaml(kDoc, "doc.yaml");
   const auto e = config_error([&] { root.child("inner").allow_keys({"depth", "width"}); });
@@ -192,7 +211,8 @@ TEST(YamlReader, ReadsTextFiles) {
     read_text_file("/nonexistent/x.yaml", "test file");
     FAIL() << "expected an IoError";
   } catch (const IoError& e) {
-    EXPECT_STREQ(e.what(), "/nonexistent/x.yaml: cannot open the test file");
+    EXPECT_STREQ(e.what(),
+                 "/nonexistent/x.yaml: cannot open the test file: No such file or directory");
   }
 }
 

@@ -3,8 +3,11 @@
 // each naming the file and the dataset or attribute path.
 #include "sinew/formats/hdf5_file.hpp"
 
+#include <sys/stat.h>
+
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -193,7 +196,22 @@ TEST(Hdf5File, BrokenFilesGiveTypedErrors) {
   const auto missing = temp_path("missing.h5");
   EXPECT_CONTAINS(error_of<IoError>([&] { open_checked(missing); }), missing + ": cannot open");
   EXPECT_CONTAINS(error_of<IoError>([&] { open_file(missing, false); }),
-                  missing + ": cannot open as an HDF5 file");
+                  missing + ": cannot open the file: No such file or directory");
+  // A FIFO with no writer blocked H5Fopen for good (scripts/fuzz_inputs.py); a folder and a FIFO
+  // are IoErrors saying what they are, and is_hdf5 does not read them.
+  const auto fifo = temp_path("fifo.h5");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_FALSE(is_hdf5(fifo));
+  EXPECT_CONTAINS(error_of<IoError>([&] { open_checked(fifo); }),
+                  fifo + ": the file is a FIFO (named pipe), not a regular file");
+  EXPECT_CONTAINS(error_of<IoError>([&] { open_file(fifo, false); }),
+                  fifo + ": the file is a FIFO");
+  std::filesystem::remove(fifo);
+  const auto folder = temp_path("folder.h5");
+  std::filesystem::create_directory(folder);
+  EXPECT_CONTAINS(error_of<IoError>([&] { open_checked(folder); }),
+                  folder + ": the file is a folder, not a regular file");
+  std::filesystem::remove(folder);
   const auto text = temp_path("text.h5");
   std::ofstream(text) << "not hdf5 at all";
   EXPECT_FALSE(is_hdf5(text));

@@ -271,6 +271,33 @@ TEST(CudaBackend, RestoredRunContinuesBitIdentically) {
   EXPECT_EQ(a->state().sliding_triangle, b->state().sliding_triangle);
 }
 
+// A damaged checkpoint's state is refused before anything reaches the device, as on the CPU
+// (BackendCore::check_state; EngineTest.RestoreRefusesADamagedState): a sliding triangle id past
+// its surface, which the first sliding kernel would read past the corner array.
+TEST(CudaBackend, RestoreRefusesADamagedState) {
+  SKIP_WITHOUT_GPU();
+  const Scene s = muscle_sliding_scene(Precision::float32);
+  auto a = make_cuda_backend(s.model, s.setup);
+  a->step(10);
+  const State good = a->state();
+  ASSERT_FALSE(good.sliding_triangle.empty());
+  State bad = good;
+  bad.sliding_triangle.back() = 1 << 20;
+  auto b = make_cuda_backend(s.model, s.setup);
+  try {
+    b->restore(bad);
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.field(), "state.sliding_triangle") << e.what();
+  }
+  bad = good;
+  bad.u[1] = std::nan("");
+  EXPECT_THROW(b->restore(bad), ConfigError);
+  b->restore(good);
+  b->step(5);
+  EXPECT_EQ(b->step_index(), 15);
+}
+
 // Calls of any length (the runner stops at every frame and probe row) run as batch graphs, short
 // graphs or single launches: all give the bits of one long call, in both precisions, with sliding
 // (lists refreshed ahead in graphs, inline in single launches).

@@ -119,6 +119,26 @@ TEST(Plan, TimeStepRuleAndRefusal) {
   EXPECT_LT(m.dt_critical, crit);
 }
 
+// A damaged model's muscle reference stress of 1e308 Pa makes h/c underflow to 0; that was
+// reported as the scene's duration being "inf steps at Δt = 0 s" (scripts/fuzz_inputs.py).
+TEST(Plan, AStepOfZeroNamesTheModelAndTheElement) {
+  auto model = layered_muscle_block();
+  model.muscles.front().reference_stress = 1e308;
+  SimSetup s;
+  s.effects.muscles = true;
+  s.activation = {Curve::constant(1.0)};
+  try {
+    make_plan(model, s);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.field(), "model");
+    EXPECT_NE(std::string(e.what()).find("the stable step h/c is 0 s at element 32 (wave modulus "
+                                         "inf Pa"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Plan, BadSetupsNameTheField) {
   const auto model = layered_muscle_block();
   SimSetup s;

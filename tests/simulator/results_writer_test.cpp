@@ -18,6 +18,7 @@
 
 #include "sim_io_support.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/formats/hdf5_file.hpp"
 #include "sinew/simulator/checkpoint.hpp"
 #include "sinew/simulator/probes.hpp"
 #include "sinew/simulator/results_writer.hpp"
@@ -682,6 +683,31 @@ TEST(Checkpoint, RejectsOtherFiles) {
   testing::write_file(dir / "text.h5", "not hdf5");
   EXPECT_THROW(read_checkpoint(dir / "text.h5"), IoError);
   EXPECT_THROW(read_checkpoint(dir / "missing.h5"), IoError);
+}
+
+// /u_prev transposed to 3 × N has the right count and was read as a scrambled state
+// (scripts/fuzz_inputs.py); its shape must be that of /u.
+TEST(Checkpoint, RefusesAPreviousDisplacementOfAnotherShape) {
+  TempDir dir("checkpoint_shape");
+  Checkpoint c;
+  c.digest = "abc";
+  c.scene_file = "scene.yaml";
+  c.model_file = "model.h5";
+  c.state.dt = 1e-4;
+  c.state.u.assign(12, 0.5);
+  c.state.u_prev.assign(12, 0.25);
+  write_checkpoint(dir / "c.h5", c);
+  {
+    const auto f = formats::hdf5::open_file(dir / "c.h5", true);
+    ASSERT_GE(H5Ldelete(f, "/u_prev", H5P_DEFAULT), 0);
+    formats::hdf5::write(f, "/u_prev", {3, 4}, c.state.u_prev.data(), dir / "c.h5");
+  }
+  try {
+    read_checkpoint(dir / "c.h5");
+    FAIL() << "expected a FormatError";
+  } catch (const FormatError& e) {
+    EXPECT_EQ(e.field(), "/u_prev");
+  }
 }
 
 TEST(Checkpoint, DigestCoversSceneModelAndPrecision) {

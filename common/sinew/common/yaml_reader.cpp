@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include "sinew/common/input_file.hpp"
+
 namespace sinew {
 
 struct YamlNode::State {
@@ -19,6 +21,46 @@ struct YamlNode::State {
 };
 
 namespace {
+
+// The length of the UTF-8 sequence at text[i] (RFC 3629: no overlong forms, no surrogates, nothing
+// past U+10FFFF), or 0 when the bytes there are not one.
+std::size_t utf8_length(const std::string& text, std::size_t i) {
+  const auto byte = [&](std::size_t k) {
+    return i + k < text.size() ? static_cast<unsigned char>(text[i + k]) : 0u;
+  };
+  const unsigned c = byte(0);
+  if (c < 0x80) return 1;
+  const auto cont = [&](std::size_t k, unsigned lo = 0x80, unsigned hi = 0xBF) {
+    return byte(k) >= lo && byte(k) <= hi;
+  };
+  if (c >= 0xC2 && c <= 0xDF) return cont(1) ? 2 : 0;
+  if (c == 0xE0) return cont(1, 0xA0) && cont(2) ? 3 : 0;
+  if (c == 0xED) return cont(1, 0x80, 0x9F) && cont(2) ? 3 : 0;  // not the surrogates
+  if (c >= 0xE1 && c <= 0xEF) return cont(1) && cont(2) ? 3 : 0;
+  if (c == 0xF0) return cont(1, 0x90) && cont(2) && cont(3) ? 4 : 0;
+  if (c >= 0xF1 && c <= 0xF3) return cont(1) && cont(2) && cont(3) ? 4 : 0;
+  if (c == 0xF4) return cont(1, 0x80, 0x8F) && cont(2) && cont(3) ? 4 : 0;
+  return 0;
+}
+
+void check_utf8(const std::string& text, const std::string& file) {
+  std::size_t line = 1, column = 1;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto n = utf8_length(text, i);
+    if (n == 0) {
+      throw ConfigError(file, "",
+                        fmt::format("not UTF-8 text: byte 0x{:02X} (line {}, column {})",
+                                    static_cast<unsigned char>(text[i]), line, column));
+    }
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+    i += n;
+  }
+}
 
 std::string join_key(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
@@ -287,6 +329,7 @@ std::string YamlNode::replaced(const std::vector<YamlReplacement>& replacements)
 }
 
 YamlNode parse_yaml(const std::string& text, const std::string& file) {
+  check_utf8(text, file);
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -300,6 +343,7 @@ YamlNode parse_yaml(const std::string& text, const std::string& file) {
 }
 
 std::string read_text_file(const std::filesystem::path& path, const std::string& what) {
+  require_regular_file(path, what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string(), "", "cannot open the " + what);
   std::stringstream ss;

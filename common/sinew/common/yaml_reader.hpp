@@ -123,10 +123,13 @@ struct YamlReplacement {
 };
 
 // Parses YAML text into its root node. `file` names the text in every message. A syntax error
-// throws ConfigError(file, "", "YAML syntax error (not valid YAML): ... (line L, column C)").
+// throws ConfigError(file, "", "YAML syntax error (not valid YAML): ... (line L, column C)"), and
+// so does text that is not UTF-8 (YAML 1.2 is Unicode; yaml-cpp passes any byte on, and names and
+// titles end up in JSON files and messages): "not UTF-8 text: byte 0x9C (line L, column C)".
 YamlNode parse_yaml(const std::string& text, const std::string& file);
 
-// The whole content of a file; IoError(path, "", "cannot open the <what>") (or "cannot read").
+// The whole content of a file; IoError(path, "", ...) when it is missing ("cannot open the <what>:
+// <reason>"), not a regular file (a folder, a FIFO, a device: require_regular_file) or unreadable.
 std::string read_text_file(const std::filesystem::path& path, const std::string& what);
 
 }  // namespace sinew

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <mutex>
@@ -16,6 +17,7 @@
 
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/common/input_file.hpp"
 
 namespace sinew::formats::hdf5 {
 
@@ -331,6 +333,8 @@ std::string error_detail() {
 // ---- Files ------------------------------------------------------------------------------------
 
 bool is_hdf5(const std::string& path) {
+  std::error_code ec;  // a FIFO or a device is no HDF5 file, and reading one may block for good
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
   const LibraryLock lock;
   const htri_t r = H5Fis_hdf5(path.c_str());
   H5Eclear2(H5E_DEFAULT);
@@ -370,6 +374,7 @@ Handle read_access() {
 
 Handle open_file(const std::string& path, bool writable) {
   const LibraryLock lock;
+  require_regular_file(path, "file");  // a FIFO would block H5Fopen for good
   const Handle fapl = read_access();
   Handle f(H5Fopen(path.c_str(), writable ? H5F_ACC_RDWR : H5F_ACC_RDONLY, fapl), H5Fclose);
   if (!f.valid()) throw io_fail(path, "", "cannot open as an HDF5 file");
@@ -379,6 +384,7 @@ Handle open_file(const std::string& path, bool writable) {
 
 Handle open_checked(const std::string& path) {
   const LibraryLock lock;
+  require_regular_file(path, "file");  // a FIFO would block H5Fopen for good
   {
     // HDF5 says "unable to open file" for a missing file and for a damaged one alike; ask the
     // system first so a missing or unreadable file is an IoError with the real reason.

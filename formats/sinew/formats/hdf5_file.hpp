@@ -93,7 +93,8 @@ std::string error_detail();
 
 // ---- Files ------------------------------------------------------------------------------------
 
-// Whether `path` carries the HDF5 signature (false for a missing or unreadable file).
+// Whether `path` carries the HDF5 signature (false for a missing or unreadable file, and for
+// anything but a regular file: a FIFO or a device is not read).
 bool is_hdf5(const std::string& path);
 // Creates (truncates) `path`; errors name `display` (default: path), e.g. the final name of a file
 // written to a temporary first. IoError on failure.

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/input_file.hpp"
 
 namespace sinew::formats {
 
@@ -112,6 +113,7 @@ std::string sha256_hex(std::string_view data) {
 }
 
 std::string sha256_file(const std::string& path) {
+  require_regular_file(path, "file");  // /dev/zero would hash for ever
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, "", std::string("cannot open for reading: ") + std::strerror(errno));
   Sha256 h;

@@ -9,6 +9,7 @@
 #include <map>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/input_file.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/formats/file_kind.hpp"
 #include "sinew/formats/hdf5_file.hpp"
@@ -34,7 +35,7 @@ std::vector<std::string> surface_names(hid_t file, const std::string& path) {
 }  // namespace
 
 h5::Handle open_results(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw IoError(path, "", "no such file");
+  require_regular_file(path, "results file");
   if (!h5::is_hdf5(path)) {
     throw FormatError(path, "", "not an HDF5 file (expected sinew results, results.h5)");
   }

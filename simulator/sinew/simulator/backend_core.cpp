@@ -525,6 +525,25 @@ void BackendCore::check_state(const State& s) const {
                       fmt::format("{} entries, this run has {} sliding nodes",
                                   s.sliding_triangle.size(), prepared_.slide_triangle.size()));
   if (s.step < 0) throw ConfigError("", "state.step", "negative step");
+  // The triangle ids index the surfaces' corners in the step's first sliding pass: one out of
+  // range (a damaged checkpoint) read past the array (scripts/fuzz_inputs.py).
+  for (std::size_t k = 0; k < s.sliding_triangle.size(); ++k) {
+    const auto t = s.sliding_triangle[k];
+    const auto& surface = prepared_.surfaces[std::size_t(prepared_.slide_surface[k])];
+    if (t < 0 || std::size_t(t) >= surface.triangles.size())
+      throw ConfigError("", "state.sliding_triangle",
+                        fmt::format("triangle {} out of range [0, {}) of surface '{}'", t,
+                                    surface.triangles.size(), surface.name))
+          .at(std::int64_t(k));
+  }
+  for (std::size_t i = 0; i < s.u.size(); ++i) {
+    if (!std::isfinite(s.u[i]) || !std::isfinite(s.u_prev[i]))
+      throw ConfigError("", std::isfinite(s.u[i]) ? "state.u_prev" : "state.u",
+                        "non-finite displacement")
+          .at(std::int64_t(i / 3));
+  }
+  if (!std::isfinite(s.time) || s.time < 0)
+    throw ConfigError("", "state.time", fmt::format("time {} is not a finite time ≥ 0", s.time));
 }
 
 template <typename T>

@@ -82,6 +82,8 @@ Checkpoint read_checkpoint(const std::string& path) {
   const auto shape = h5::shape(f, "/u", path);
   if (shape.size() != 2 || shape[1] != 3) throw FormatError(path, "/u", "expected shape N × 3");
   s.u = h5::read<double>(f, "/u", path);
+  if (h5::shape(f, "/u_prev", path) != shape)  // a transposed 3 × N has the right count too
+    throw FormatError(path, "/u_prev", "expected the shape of /u, N × 3");
   s.u_prev = h5::read<double>(f, "/u_prev", path, static_cast<std::int64_t>(s.u.size()));
   s.sliding_triangle = h5::read<std::int32_t>(f, "/sliding_triangle", path);
   return c;

@@ -247,6 +247,20 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
     }
   }
   plan.dt_critical = dt_crit;
+  // A modulus so large that h/c underflows to 0 (a muscle reference stress of 1e308 Pa in a
+  // damaged model) was reported as the scene's duration being "inf steps at Δt = 0 s".
+  if (!(dt_crit > 0)) {
+    const auto e = std::size_t(plan.dt_critical_element);
+    const auto& r = plan.parameters[std::size_t(plan.parameter_row[e])];
+    throw ConfigError(
+        "", "model",
+        fmt::format("the stable step h/c is {:.3g} s at element {} (wave modulus {:.3g} Pa, "
+                    "density {:.3g} kg/m^3): a material's stiffness or a muscle's reference "
+                    "stress is out of range, or the model is damaged",
+                    dt_crit, e,
+                    (fx.elasticity ? r.p_wave : 0.0) + (fx.muscles ? muscle_modulus[e] : 0.0),
+                    r.density));
+  }
   const auto& ts = setup.time_step;
   const double allowed = ts.safety_factor * dt_crit;
   const bool finite = dt_crit < 1e29;

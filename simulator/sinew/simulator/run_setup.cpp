@@ -5,13 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <utility>
 
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/yaml_reader.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/simulator/cuda_backend.hpp"
 #include "sinew/simulator/run_estimate.hpp"
@@ -52,7 +51,7 @@ bool choose_cuda(const std::string& device) {
 }
 
 std::unique_ptr<Backend> make_backend(bool cuda, const formats::Model& model, const Setup& setup,
-                                      const RunOptions& options) {
+                                      const RunOptions& options, const std::string& model_path) {
   const std::string& scene_path = options.scene_path;
   try {
     if (options.make_backend) return options.make_backend(model, setup);  // the caller's engine
@@ -62,6 +61,15 @@ std::unique_ptr<Backend> make_backend(bool cuda, const formats::Model& model, co
   } catch (const ConfigError& e) {
     // The engine names Setup fields; point at the scene key the user wrote instead.
     if (!e.file().empty()) throw;
+    // "model" and "model.grid.voxel_size" are the model file's doing: name that file and its
+    // dataset ("/grid/voxel_size"), not the scene.
+    if (e.field() == "model" || e.field().rfind("model.", 0) == 0) {
+      std::string dataset = e.field() == "model" ? "" : e.field().substr(5);
+      std::replace(dataset.begin(), dataset.end(), '.', '/');
+      auto err = ConfigError(model_path, dataset, e.problem());
+      if (e.index()) err.at(*e.index());
+      throw err;
+    }
     static const std::pair<const char*, const char*> kKeys[] = {
         {"time_step.user_dt", "time_step.value"},
         {"time_step.safety_factor", "time_step.safety_factor"},
@@ -84,11 +92,7 @@ std::unique_ptr<Backend> make_backend(bool cuda, const formats::Model& model, co
 }  // namespace
 
 std::string read_scene_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, "", "cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  return read_text_file(path, "scene file");
 }
 
 LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>& adjust) {
@@ -125,7 +129,7 @@ LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>&
   if (adjust) adjust(r.resolved.setup);
   const Setup& setup = r.resolved.setup;
   if (options.make_backend) r.cuda = false;  // the caller's engine, on the host
-  r.backend = make_backend(r.cuda, model, setup, options);
+  r.backend = make_backend(r.cuda, model, setup, options, scene.model_path);
   r.engine_s = seconds_since(engine_start);
   const Plan& plan = r.backend->plan();
   r.threads = options.threads > 0 ? options.threads : omp_get_max_threads();

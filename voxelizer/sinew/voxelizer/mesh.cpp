@@ -16,6 +16,7 @@
 #include <unordered_map>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/input_file.hpp"
 #include "sinew/common/log.hpp"
 
 namespace sinew::voxelizer {
@@ -290,10 +291,7 @@ IndexedUvs indexed_uvs(const TriangleMesh& mesh) {
 
 TriangleMesh load_mesh(const std::filesystem::path& path, const MeshTransform& t) {
   const std::string file = path.string();
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw IoError(file, "", "file does not exist");
-  if (std::filesystem::is_directory(path, ec))
-    throw IoError(file, "", "is a directory, not a mesh");
+  require_regular_file(path, "mesh");  // a folder, a FIFO or a device is no mesh
   {
     std::ifstream probe(path, std::ios::binary);
     if (!probe) throw IoError(file, "", "cannot open the file for reading");
