@@ -139,8 +139,9 @@ TEST(Tools, GenerateRejectsABadMaterial) {
 
 TEST(Tools, H5pyReadsTheFile) {
   // Any HDF5 reader must understand the file; h5py is the one users reach for.
-  if (run("python3 -c 'import h5py'").status != 0) {
-    GTEST_SKIP() << "python3 with h5py is not available here";
+  const std::string python = SINEW_PYTHON;
+  if (python.empty() || run(python + " -c 'import h5py'").status != 0) {
+    GTEST_SKIP() << "'" << python << "' has no h5py (scripts/install-deps installs python3-h5py)";
   }
   const std::string model = sinew::formats::testing::temp_path("model.h5");
   const std::string script = sinew::formats::testing::temp_path("read.py");
@@ -162,7 +163,7 @@ assert f["muscles/fibres"].shape == (24, 3)
 print("ok")
 )";
   }
-  const Result r = run("python3 " + script + " " + model);
+  const Result r = run(python + " " + script + " " + model);
   EXPECT_EQ(r.status, 0) << r.out << r.err;
   EXPECT_EQ(r.out, "ok\n");
   std::filesystem::remove(model);
