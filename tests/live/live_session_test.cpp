@@ -441,6 +441,99 @@ TEST_P(LiveSession, DragIsRefusedWithTheReasonWhenTheSceneHasNoLoads) {
   }
 }
 
+// The CPU engine, failing in step() like a lost device once it reaches `fail_at` (until
+// restored to an earlier step): for the session's handling of failures that are not instabilities.
+class FailingEngine : public simulator::Backend {
+ public:
+  FailingEngine(std::unique_ptr<simulator::Backend> engine, std::int64_t fail_at)
+      : e_(std::move(engine)), fail_at_(fail_at) {}
+  std::string name() const override { return e_->name(); }
+  const simulator::Plan& plan() const override { return e_->plan(); }
+  void step(std::int64_t n) override {
+    const std::int64_t left = fail_at_ - e_->step_index();
+    if (left > 0) e_->step(std::min(n, left));
+    if (e_->step_index() >= fail_at_) throw std::runtime_error("device lost (test)");
+  }
+  std::int64_t step_index() const override { return e_->step_index(); }
+  double time() const override { return e_->time(); }
+  double dt() const override { return e_->dt(); }
+  simulator::State state() const override { return e_->state(); }
+  void restore(const simulator::State& s) override { e_->restore(s); }
+  std::vector<double> displacements() const override { return e_->displacements(); }
+  std::vector<double> displacements(const std::vector<simulator::Index>& nodes) const override {
+    return e_->displacements(nodes);
+  }
+  std::vector<double> velocities() const override { return e_->velocities(); }
+  std::vector<double> internal_forces() override { return e_->internal_forces(); }
+  std::array<double, 3> reaction(const std::vector<simulator::Index>& nodes) override {
+    return e_->reaction(nodes);
+  }
+  simulator::Energies energies() override { return e_->energies(); }
+  simulator::ElementFields element_fields() override { return e_->element_fields(); }
+  void set_activation_override(std::size_t m, std::optional<double> a) override {
+    e_->set_activation_override(m, a);
+  }
+  std::optional<double> activation_override(std::size_t m) const override {
+    return e_->activation_override(m);
+  }
+  std::size_t force_slot_count() const override { return e_->force_slot_count(); }
+  void set_force_slot(std::size_t k, const std::vector<simulator::Index>& nodes,
+                      const std::array<double, 3>& force) override {
+    e_->set_force_slot(k, nodes, force);
+  }
+  void clear_force_slot(std::size_t k) override { e_->clear_force_slot(k); }
+  simulator::Frame frame(bool with_fields) override { return e_->frame(with_fields); }
+
+ private:
+  std::unique_ptr<simulator::Backend> e_;
+  std::int64_t fail_at_;
+};
+
+// An engine failure that is not an instability (a device error, memory) used to end sinew-live
+// with the engine thread (std::terminate). Now it pauses the session with the message, as an
+// instability does; the session goes on answering, a reset recovers, and a recording started
+// before the failure is finished readable at stop.
+TEST(LiveSessionFailure, AnEngineErrorPausesWithItsMessageAndTheServerGoesOn) {
+  log::set_level(log::Level::error);
+  TempDir dir("live_engine_error");
+  auto run = simulator::load_run(case_options(dir, "cpu"), make_live_setup);
+  run.backend = std::make_unique<FailingEngine>(std::move(run.backend), 50);
+  SessionOptions so;
+  so.start_paused = true;
+  so.record_dir = dir / "rec";
+  Session session(std::move(run), so);
+  session.start();
+  Command c;
+  c.kind = Command::Kind::step;
+  c.count = 200;
+  session.submit(c);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (session.last_error().empty() &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  const std::string message = session.last_error();
+  EXPECT_NE(message.find("the engine failed: device lost (test)"), std::string::npos) << message;
+  EXPECT_TRUE(session.paused());
+  EXPECT_EQ(session.step_index(), 50);
+  ASSERT_TRUE(session.wait_idle(10));
+  for (int k = 0; k < 100 && session.latest_status()->find("\"error\":null") != std::string::npos;
+       ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_NE(session.latest_status()->find("device lost"), std::string::npos);
+  // Still answering: a reset clears the error and steps again, short of the failing step.
+  Command reset;
+  reset.kind = Command::Kind::reset;
+  session.submit(reset);
+  ASSERT_TRUE(session.wait_idle(10));
+  EXPECT_EQ(session.last_error(), "");
+  step(session, 30);
+  EXPECT_EQ(session.last_error(), "");
+  session.stop();
+  const std::filesystem::path rec = dir / "rec";
+  EXPECT_TRUE(std::filesystem::exists(rec / "results.h5"));
+  EXPECT_TRUE(std::filesystem::exists(rec / "scene.yaml"));
+}
+
 TEST(LivePlayback, OffersOnlyTheElementFieldsTheFileStores) {
   TempDir dir("live_play_fields");
   const auto o = case_options(dir, "cpu");

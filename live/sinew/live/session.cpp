@@ -504,6 +504,17 @@ void Session::publish_status() {
   publish(std::move(msg), false, latest_status_);
 }
 
+void Session::stop_with_error(const std::string& message) {
+  paused_ = true;
+  pending_steps_ = 0;
+  {
+    std::lock_guard lock(mutex_);
+    error_ = message;
+  }
+  log::warn("live: {}", message);
+  changed_ = true;
+}
+
 void Session::loop() {
   auto& backend = *run_.backend;
   const double frame_period = 1.0 / std::max(1.0, options_.frame_rate);
@@ -515,10 +526,14 @@ void Session::loop() {
   std::int64_t pace_step = backend.step_index();
   std::int64_t rate_steps = 0, last_frame_step = -1;
   chunk_ = 1;
-  if (playing_)
-    seek(0);
-  else
-    publish_frame();
+  try {
+    if (playing_)
+      seek(0);
+    else
+      publish_frame();
+  } catch (const std::exception& e) {
+    stop_with_error(e.what());
+  }
   publish_status();
   while (!stop_) {
     std::vector<Command> commands;
@@ -581,14 +596,12 @@ void Session::loop() {
       try {
         backend.step(k);
       } catch (const InstabilityError& e) {
-        paused_ = true;
-        pending_steps_ = 0;
-        {
-          std::lock_guard lock(mutex_);
-          error_ = e.what();
-        }
-        log::warn("live: {}", e.what());
-        changed_ = true;
+        stop_with_error(e.what());
+      } catch (const std::exception& e) {
+        // Any other failure (a device error, memory) stops the engine as an instability does,
+        // instead of ending the process with the engine thread: the page shows the message, and
+        // a recording is finished at stop.
+        stop_with_error(fmt::format("the engine failed: {}", e.what()));
       }
       const auto elapsed = Clock::now() - t0;
       const double wall = std::chrono::duration<double>(elapsed).count();
@@ -614,7 +627,11 @@ void Session::loop() {
     }
     const bool frame_due = seconds_since(last_frame) >= frame_period;
     if (changed_ || (frame_due && backend.step_index() != last_frame_step)) {
-      publish_frame();
+      try {
+        publish_frame();
+      } catch (const std::exception& e) {
+        stop_with_error(fmt::format("cannot take a frame: {}", e.what()));
+      }
       last_frame = Clock::now();
       last_frame_step = backend.step_index();
     }

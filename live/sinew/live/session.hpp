@@ -106,6 +106,9 @@ class Session {
 
  private:
   void loop();
+  // The engine stops where it is: paused, pending steps dropped, `message` shown as the error
+  // (an instability, or any other failure of the engine or of a played-back file).
+  void stop_with_error(const std::string& message);
   void apply(const Command& c);
   void publish_frame();
   // Frame from the displacements of surface_.nodes (3 per node, m) and, when field_ is an element
@@ -135,7 +138,7 @@ class Session {
   std::uint64_t submitted_ = 0, applied_ = 0;
   Sink sink_;
   std::shared_ptr<const std::string> latest_frame_, latest_status_;
-  std::string error_;  // the engine's last message (instability)
+  std::string error_;  // the engine's last message (instability or another failure)
 
   std::thread thread_;
   std::atomic<bool> stop_{false}, paused_{false};
