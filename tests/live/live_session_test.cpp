@@ -64,6 +64,14 @@ void step(Session& s, std::int64_t n) {
   ASSERT_EQ(frame_step(), target);
 }
 
+// The session's error message, once it has one (empty after 30 s without).
+std::string wait_for_error(const Session& s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  while (s.last_error().empty() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  return s.last_error();
+}
+
 void activate(Session& s, std::optional<double> a) {
   Command c;
   c.kind = Command::Kind::activation;
@@ -224,11 +232,7 @@ TEST_P(LiveSession, InstabilityPausesWithTheEnginesMessageAndResetRecovers) {
   c.kind = Command::Kind::step;
   c.count = 2000;
   session.submit(c);
-  const auto t0 = std::chrono::steady_clock::now();
-  while (session.last_error().empty() &&
-         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30))
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  const std::string message = session.last_error();
+  const std::string message = wait_for_error(session);
   ASSERT_FALSE(message.empty()) << "the drag should have made the run unstable";
   EXPECT_NE(message.find("step"), std::string::npos) << message;
   EXPECT_TRUE(session.paused());
@@ -507,11 +511,7 @@ TEST(LiveSessionFailure, AnEngineErrorPausesWithItsMessageAndTheServerGoesOn) {
   c.kind = Command::Kind::step;
   c.count = 200;
   session.submit(c);
-  const auto t0 = std::chrono::steady_clock::now();
-  while (session.last_error().empty() &&
-         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30))
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  const std::string message = session.last_error();
+  const std::string message = wait_for_error(session);
   EXPECT_NE(message.find("the engine failed: device lost (test)"), std::string::npos) << message;
   EXPECT_TRUE(session.paused());
   EXPECT_EQ(session.step_index(), 50);
