@@ -44,8 +44,9 @@
 #include "sinew/common/tool.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model_file.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/engine/backend.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
 #include "sliding_height_field.hpp"
 
 using namespace sinew;

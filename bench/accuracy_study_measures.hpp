@@ -2,7 +2,7 @@
 // Error measures of the accuracy-versus-time study (bench/accuracy_study.cpp,
 // docs/accuracy-vs-time.md): Richardson extrapolation of a converging sequence, the observed order
 // of convergence, bilinear sampling of a nodal field on a lattice face, and relative vector-field
-// errors. Header-only and free of the engine, so tests/simulator/accuracy_measures_test.cpp checks
+// errors. Header-only and free of the engine, so tests/bench/accuracy_measures_test.cpp checks
 // them in milliseconds.
 #include <array>
 #include <cmath>

@@ -21,9 +21,10 @@
 #include <vector>
 
 #include "scene_timing.hpp"
-#include "sinew/simulator/benchmark_models.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/engine/backend.hpp"
+#include "sinew/simulator/engine/benchmark_models.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
 
 using namespace sinew;
 using namespace sinew::simulator;

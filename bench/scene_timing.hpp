@@ -17,10 +17,11 @@
 #include <vector>
 
 #include "sinew/formats/model_file.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/engine.hpp"
-#include "sinew/simulator/runner.hpp"
-#include "sinew/simulator/scene.hpp"
+#include "sinew/simulator/engine/backend.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
+#include "sinew/simulator/run/runner.hpp"
+#include "sinew/simulator/run/scene.hpp"
 
 namespace sinew::bench {
 
@@ -114,9 +115,10 @@ inline int run_scene_timing(const SceneTimingOptions& o) {
         std::printf("  stage %-12s %9.4f ms/step  %5.1f%%\n", stage.c_str(),
                     s.steps_this_run > 0 ? 1e3 * seconds / double(s.steps_this_run) : 0.0,
                     run_ms > 0 ? 100 * 1e3 * seconds / double(s.steps_this_run) / run_ms : 0.0);
-      std::printf("  frames: %lld, written in %.3f s (on the frame thread where the backend steps "
-                  "on the GPU)\n",
-                  (long long)s.frames, s.frame_writing_s);
+      std::printf(
+          "  frames: %lld, written in %.3f s (on the frame thread where the backend steps "
+          "on the GPU)\n",
+          (long long)s.frames, s.frame_writing_s);
       const double simulated_per_wall =
           s.wall_time_s > 0 ? s.simulated_time / s.wall_time_s : 0.0;  // scene time
       char line[512];

@@ -18,7 +18,8 @@
 
 #include "scene_timing.hpp"
 #include "sinew/formats/box_model.hpp"
-#include "sinew/simulator/engine.hpp"
+#include "sinew/simulator/engine/backend.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
 #include "sliding_height_field.hpp"
 
 using namespace sinew;

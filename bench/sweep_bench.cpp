@@ -33,8 +33,9 @@
 #include <nlohmann/json.hpp>
 
 #include "sinew/formats/model_file.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/scene.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
+#include "sinew/simulator/run/scene.hpp"
 #include "sinew/sweep/run_sweep.hpp"
 #include "sinew/sweep/sweep_file.hpp"
 

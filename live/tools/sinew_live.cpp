@@ -21,7 +21,7 @@
 #include "sinew/live/playback.hpp"
 #include "sinew/live/server.hpp"
 #include "sinew/live/session.hpp"
-#include "sinew/simulator/run_setup.hpp"
+#include "sinew/simulator/run/run_setup.hpp"
 
 int main(int argc, char** argv) {
   using namespace sinew;

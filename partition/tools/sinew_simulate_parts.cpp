@@ -23,7 +23,7 @@
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/partition/partitioned_engine.hpp"
-#include "sinew/simulator/runner.hpp"
+#include "sinew/simulator/run/runner.hpp"
 
 namespace {
 

@@ -19,7 +19,7 @@
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/formats/model_file.hpp"
-#include "sinew/simulator/benchmark_models.hpp"
+#include "sinew/simulator/engine/benchmark_models.hpp"
 
 namespace {
 

@@ -20,7 +20,7 @@
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/partition/partition.hpp"
-#include "sinew/simulator/runner.hpp"
+#include "sinew/simulator/run/runner.hpp"
 
 namespace {
 

@@ -20,7 +20,7 @@
 #include "sinew/common/log.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
-#include "sinew/simulator/runner.hpp"
+#include "sinew/simulator/run/runner.hpp"
 #include "sinew/sweep/run_sweep.hpp"
 #include "sinew/sweep/sweep_file.hpp"
 #if defined(SINEW_WITH_MPI)

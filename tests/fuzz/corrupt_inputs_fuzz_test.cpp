@@ -32,9 +32,9 @@
 #include "sinew/formats/model_file.hpp"
 #include "sinew/formats/summary.hpp"
 #include "sinew/postprocess/results_reader.hpp"
-#include "sinew/simulator/checkpoint.hpp"
-#include "sinew/simulator/results_writer.hpp"
-#include "sinew/simulator/scene.hpp"
+#include "sinew/simulator/engine/checkpoint.hpp"
+#include "sinew/simulator/output/results_writer.hpp"
+#include "sinew/simulator/run/scene.hpp"
 #ifdef SINEW_FUZZ_WITH_VOXELIZER
 #include "sinew/voxelizer/spec.hpp"
 #endif

@@ -21,8 +21,8 @@
 #include "sinew/common/log.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/live/session.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/run_setup.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
+#include "sinew/simulator/run/run_setup.hpp"
 
 namespace sinew::live {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model_file.hpp"
-#include "sinew/simulator/benchmark_models.hpp"
+#include "sinew/simulator/engine/benchmark_models.hpp"
 
 namespace sinew::live::testing {
 

@@ -8,7 +8,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/partition/partition.hpp"
-#include "sinew/simulator/benchmark_models.hpp"
+#include "sinew/simulator/engine/benchmark_models.hpp"
 
 namespace sinew::partition {
 namespace {

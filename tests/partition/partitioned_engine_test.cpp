@@ -10,7 +10,8 @@
 #include "../simulator/engine_test_support.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/partition/partitioned_engine.hpp"
-#include "sinew/simulator/benchmark_models.hpp"
+#include "sinew/simulator/engine/benchmark_models.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
 
 namespace sinew::partition {
 namespace {

@@ -27,7 +27,7 @@
 #include "sinew/postprocess/rasterizer.hpp"
 #include "sinew/postprocess/render_session.hpp"
 #include "sinew/postprocess/results_reader.hpp"
-#include "sinew/simulator/results_writer.hpp"
+#include "sinew/simulator/output/results_writer.hpp"
 #include "test_meshes.hpp"
 
 namespace {
@@ -594,8 +594,8 @@ TEST(ExportTools, GifWithoutAnEncoderSaysWhichToolIsWrong) {
   fs::permissions(fake, fs::perms::owner_all);
   const auto log = (dir / "log.txt").string();
   auto gif = [&](const std::string& path) {
-    const std::string cmd = "PATH='" + path + "' " + SINEW_RENDER_EXE + " " + results +
-                            " --gif " + (dir / "a.gif").string() + " > " + log + " 2>&1";
+    const std::string cmd = "PATH='" + path + "' " + SINEW_RENDER_EXE + " " + results + " --gif " +
+                            (dir / "a.gif").string() + " > " + log + " 2>&1";
     return std::system(cmd.c_str());
   };
   auto text = [&] {

@@ -16,7 +16,7 @@
 
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/postprocess/results_reader.hpp"
-#include "sinew/simulator/results_writer.hpp"
+#include "sinew/simulator/output/results_writer.hpp"
 #include "test_meshes.hpp"
 
 namespace sinew::postprocess::testing {

@@ -21,7 +21,7 @@
 #include "sinew/formats/hdf5_file.hpp"
 #include "sinew/postprocess/results_reader.hpp"
 #include "sinew/postprocess/wrinkles.hpp"
-#include "sinew/simulator/results_writer.hpp"
+#include "sinew/simulator/output/results_writer.hpp"
 
 namespace {
 

@@ -15,9 +15,10 @@
 
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/engine.hpp"
-#include "sinew/simulator/setup.hpp"
+#include "sinew/simulator/engine/backend.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
+#include "sinew/simulator/engine/setup.hpp"
 
 namespace sinew::simulator::testing {
 

@@ -13,7 +13,7 @@
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model.hpp"
 #include "sinew/formats/model_file.hpp"
-#include "sinew/simulator/runner.hpp"
+#include "sinew/simulator/run/runner.hpp"
 
 namespace sinew::simulator::testing {
 

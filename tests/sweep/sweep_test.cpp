@@ -12,8 +12,8 @@
 #include "sinew/common/error.hpp"
 #include "sinew/formats/box_model.hpp"
 #include "sinew/formats/model_file.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/runner.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
+#include "sinew/simulator/run/runner.hpp"
 #include "sinew/sweep/run_sweep.hpp"
 #include "sinew/sweep/sweep_file.hpp"
 

@@ -18,6 +18,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/voxelizer/forehead.hpp"
+#include "sinew/voxelizer/mesh_source.hpp"
 #include "sinew/voxelizer/rig.hpp"
 #include "sinew/voxelizer/spec.hpp"
 #include "sinew/voxelizer/voxelize.hpp"

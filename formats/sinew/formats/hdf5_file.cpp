@@ -52,12 +52,6 @@ SINEW_HDF5_TYPE(std::int64_t, H5T_NATIVE_INT64, H5T_STD_I64LE, "int64")
 SINEW_HDF5_TYPE(std::uint8_t, H5T_NATIVE_UINT8, H5T_STD_U8LE, "uint8")
 #undef SINEW_HDF5_TYPE
 
-herr_t innermost(unsigned, const H5E_error2_t* err, void* data) {
-  // Walking downward (API call first), so the last non-empty description is the innermost one.
-  if (err->desc && *err->desc) *static_cast<std::string*>(data) = err->desc;
-  return 0;
-}
-
 // A failed system call inside HDF5's file driver reads "... errno = 28, error message = 'No space
 // left on device', buf = 0x..., bytes actually written = 18446744073709551615, ..." (the -1 of
 // write() as unsigned): reduce that to the reason alone.
@@ -75,27 +69,6 @@ IoError io_fail(const std::string& file, const std::string& name, const std::str
   return IoError(file, name, reason.empty() ? what + detail : what + ": " + reason);
 }
 
-// Set when closing a file failed (a full disk at the final flush). HDF5 1.10 then keeps a
-// half-torn-down file in its ID table and segfaults closing it again in its atexit handler
-// (H5F__close_cb), so the library is terminated at exit only while no file close has failed.
-std::atomic<bool> file_close_failed{false};
-
-struct LibraryLifetime {
-  LibraryLifetime() {
-    // Not LibraryLock: its quiet_errors() would start the library, and H5dont_atexit must come
-    // before anything else.
-    const std::lock_guard<std::recursive_mutex> lock(library_mutex());
-    if (H5dont_atexit() >= 0) {
-      std::atexit([] {
-        // A thread still inside HDF5 at exit (a detached one): skip the clean-up rather than
-        // race it or wait for it.
-        std::unique_lock<std::recursive_mutex> lock(library_mutex(), std::try_to_lock);
-        if (lock.owns_lock() && !file_close_failed.load()) H5close();
-      });
-    }
-  }
-};
-const LibraryLifetime library_lifetime;
 FormatError format_fail(const std::string& file, const std::string& name, const std::string& what) {
   return FormatError(file, name, what + error_detail());
 }
@@ -271,64 +244,6 @@ void put_attribute(hid_t obj, const std::string& name, hid_t file_type, hid_t me
 }
 
 }  // namespace
-
-// ---- Handle, errors, types --------------------------------------------------------------------
-
-Handle& Handle::operator=(Handle&& o) noexcept {
-  if (this != &o) {
-    reset();
-    id_ = o.id_;
-    closer_ = o.closer_;
-    o.id_ = -1;
-  }
-  return *this;
-}
-
-void Handle::reset() {
-  if (id_ < 0) return;  // empty or moved from: nothing to close, no lock to take
-  const LibraryLock lock;
-  // A failed close here is already being handled (an exception unwinding): drop its error stack.
-  if (!close()) H5Eclear2(H5E_DEFAULT);
-}
-
-bool Handle::close() {
-  if (id_ < 0 || !closer_) {
-    id_ = -1;
-    return true;
-  }
-  const LibraryLock lock;
-  const herr_t status = closer_(id_);
-  if (status < 0 && closer_ == &H5Fclose) file_close_failed.store(true);
-  id_ = -1;
-  return status >= 0;
-}
-
-std::recursive_mutex& library_mutex() {
-  static auto* const mutex = new std::recursive_mutex;  // never destroyed: see the header
-  return *mutex;
-}
-
-LibraryLock::LibraryLock() : guard_(library_mutex()) {
-  quiet_errors();
-}
-
-void quiet_errors() {
-  // Per thread: a thread-safe HDF5 keeps the automatic error printing per thread, so a frame
-  // writer or a sweep run's thread would otherwise print HDF5's error stack on every failure.
-  thread_local bool quiet = false;
-  if (quiet) return;
-  const std::lock_guard<std::recursive_mutex> guard(library_mutex());
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  quiet = true;
-}
-
-std::string error_detail() {
-  const LibraryLock lock;
-  std::string detail;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, innermost, &detail);
-  H5Eclear2(H5E_DEFAULT);
-  return detail.empty() ? std::string() : " (HDF5: " + detail + ")";
-}
 
 // ---- Files ------------------------------------------------------------------------------------
 

@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
-#include "sinew/formats/hdf5_file.hpp"
+#include "sinew/formats/hdf5_handle.hpp"
 
 namespace sinew::formats::hdf5 {
 namespace {

@@ -12,7 +12,7 @@
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
-#include "sinew/simulator/results_writer.hpp"
+#include "sinew/simulator/output/results_writer.hpp"
 
 namespace sinew::live {
 

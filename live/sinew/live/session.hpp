@@ -24,9 +24,9 @@
 #include "sinew/live/playback.hpp"
 #include "sinew/live/protocol.hpp"
 #include "sinew/live/steering_log.hpp"
-#include "sinew/simulator/output_schedule.hpp"
-#include "sinew/simulator/run_setup.hpp"
-#include "sinew/simulator/state.hpp"
+#include "sinew/simulator/engine/state.hpp"
+#include "sinew/simulator/output/output_schedule.hpp"
+#include "sinew/simulator/run/run_setup.hpp"
 
 namespace sinew::simulator {
 class ResultsWriter;

@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "sinew/common/yaml_reader.hpp"
-#include "sinew/simulator/backend_core.hpp"
+#include "sinew/simulator/engine/backend_core.hpp"
 
 namespace sinew::live {
 
@@ -115,7 +115,8 @@ std::vector<std::array<double, 2>> reproduce_activation(
     if (c.step > end_step) break;
     const double from = value(phases.back(), c.step, phases.size() == 1);
     if (phases.size() > 1 && phases.back().start == c.step)
-      phases.back().target = c.value;  // the later change of one step wins; its ramp starts the same
+      phases.back().target =
+          c.value;  // the later change of one step wins; its ramp starts the same
     else
       phases.push_back({c.step, c.value, from});
   }

@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "sinew/formats/model.hpp"
-#include "sinew/simulator/curve.hpp"
-#include "sinew/simulator/scene.hpp"
+#include "sinew/simulator/engine/curve.hpp"
+#include "sinew/simulator/run/scene.hpp"
 
 namespace sinew::live {
 

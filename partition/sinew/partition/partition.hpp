@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "sinew/formats/model.hpp"
-#include "sinew/simulator/plan.hpp"
+#include "sinew/simulator/engine/plan.hpp"
 
 namespace sinew::partition {
 

@@ -14,7 +14,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/partition/partition.hpp"
-#include "sinew/simulator/backend_core.hpp"
+#include "sinew/simulator/engine/backend_core.hpp"
 #include "sinew/simulator/passes/constraint_program.hpp"
 #include "sinew/simulator/passes/cpu_for_each.hpp"
 #include "sinew/simulator/passes/effect_dispatch.hpp"

@@ -29,8 +29,9 @@
 #include <mpi.h>
 
 #include "sinew/formats/model.hpp"
-#include "sinew/simulator/engine.hpp"
-#include "sinew/simulator/setup.hpp"
+#include "sinew/simulator/engine/backend.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
+#include "sinew/simulator/engine/setup.hpp"
 
 namespace sinew::partition {
 

@@ -17,9 +17,9 @@
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/run_summary.hpp"
-#include "sinew/simulator/runner.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
+#include "sinew/simulator/run/run_summary.hpp"
+#include "sinew/simulator/run/runner.hpp"
 
 namespace sinew::sweep {
 

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "sinew/simulator/model_cache.hpp"
+#include "sinew/simulator/engine/model_cache.hpp"
 #include "sinew/sweep/sweep_file.hpp"
 #include "sinew/sweep/table.hpp"
 

@@ -6,7 +6,7 @@
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
-#include "sinew/simulator/scene.hpp"
+#include "sinew/simulator/run/scene.hpp"
 
 namespace sinew::sweep {
 

@@ -11,8 +11,8 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
-#include "sinew/simulator/cuda_backend.hpp"
-#include "sinew/simulator/runner.hpp"
+#include "sinew/simulator/engine/cuda_backend.hpp"
+#include "sinew/simulator/run/runner.hpp"
 
 namespace sinew::sweep {
 

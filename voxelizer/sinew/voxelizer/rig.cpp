@@ -9,7 +9,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/voxelizer/distance.hpp"
-#include "sinew/voxelizer/voxelize.hpp"
+#include "sinew/voxelizer/mesh_source.hpp"
 #include "sinew/voxelizer/winding_number.hpp"
 
 namespace sinew::voxelizer {

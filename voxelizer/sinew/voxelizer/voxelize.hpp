@@ -80,9 +80,6 @@ struct VoxelizeResult {
 // (memory estimate above the limit; the message gives the estimate). Writes no file.
 VoxelizeResult voxelize(const Spec& spec, const VoxelizeOptions& options = {});
 
-// Loads one mesh source (file or primitive) in metres, without cleaning.
-TriangleMesh load_mesh_source(const MeshSource& source);
-
 // "1.50 GiB" or "12.3 MiB": how the summary and the memory error print a size in bytes.
 std::string format_bytes(double bytes);
 

@@ -9,9 +9,9 @@
 
 #include "sinew/common/host_device.hpp"
 #include "sinew/common/math.hpp"
+#include "sinew/simulator/passes/sliding_grid.hpp"
 #include "sinew/simulator/passes/step_status.hpp"
 #include "sinew/simulator/physics/sliding.hpp"
-#include "sinew/simulator/sliding_grid.hpp"
 
 namespace sinew::simulator {
 

@@ -21,7 +21,6 @@
 #include "sinew/simulator/physics/muscle.hpp"
 #include "sinew/simulator/physics/neo_hookean.hpp"
 #include "sinew/simulator/physics/sliding.hpp"
-#include "sinew/simulator/sliding_grid.hpp"
 
 namespace sinew::simulator::physics {
 
