@@ -10,7 +10,7 @@
 #include <string>
 
 #include "sinew/formats/model.hpp"
-#include "sinew/simulator/engine/engine.hpp"
+#include "sinew/simulator/engine/backend.hpp"
 #include "sinew/simulator/engine/model_cache.hpp"
 #include "sinew/simulator/engine/plan.hpp"
 #include "sinew/simulator/run/run_summary.hpp"
