@@ -1,5 +1,4 @@
 #include "sinew/simulator/run/run_setup.hpp"
-#include "sinew/simulator/engine/cpu_engine.hpp"
 
 #include <omp.h>
 
@@ -13,6 +12,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/common/yaml_reader.hpp"
 #include "sinew/formats/model_file.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
 #include "sinew/simulator/engine/cuda_backend.hpp"
 #include "sinew/simulator/run/run_estimate.hpp"
 
