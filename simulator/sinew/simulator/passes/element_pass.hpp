@@ -1,7 +1,7 @@
 #pragma once
 // The element pass's loop body, written once for both engines (the CPU's OpenMP chunks in
-// engine.cpp and the CUDA element kernel in cuda/element_kernels.cuh call it; the tiled kernel
-// computes its elements from shared-memory windows with the same physics call).
+// engine/cpu_engine.cpp and the CUDA element kernel in engine/cuda/element_kernels.cuh call it;
+// the tiled kernel computes its elements from shared-memory windows with the same physics call).
 //
 // One element e: its node ids, parameter row and muscle entries (element_start: what the pass reads
 // before the displacements, so a GPU kernel can issue these loads before it waits on the kernel
