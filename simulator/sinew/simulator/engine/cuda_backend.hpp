@@ -1,8 +1,8 @@
 #pragma once
-// The CUDA backend (docs/cuda-backend.md): the Backend of backend.hpp on one NVIDIA GPU, calling the
-// same physics functions (physics/element.hpp) as the CPU backend. Host-only API: no CUDA headers.
-// Built when CMake's SINEW_CUDA_ENABLED is on; otherwise make_cuda_backend throws ConfigError
-// ("built without CUDA") and cuda_device_available() is false.
+// The CUDA backend (docs/cuda-backend.md): the Backend of backend.hpp on one NVIDIA GPU, calling
+// the same physics functions (physics/element.hpp) as the CPU backend. Host-only API: no CUDA
+// headers. Built when CMake's SINEW_CUDA_ENABLED is on; otherwise make_cuda_backend throws
+// ConfigError ("built without CUDA") and cuda_device_available() is false.
 #include <cstdint>
 #include <memory>
 #include <string>

@@ -1,8 +1,8 @@
 #pragma once
 // The loads and constraints of a step as one program per constrained node, written once for both
-// engines: the host builds it (backend_core.cpp, make_constraint_program) in the one order of
-// loads and constraints, and the CPU's constraint pass (engine/cpu_engine.cpp) and the CUDA node, tile and
-// constraint kernels run it with run_program.
+// engines: the host builds it (backend_core.cpp, make_constraint_program) in the one order of loads
+// and constraints, and the CPU's constraint pass (engine/cpu_engine.cpp) and the CUDA node, tile
+// and constraint kernels run it with run_program.
 #include <cstdint>
 
 #include "sinew/common/host_device.hpp"

@@ -1,7 +1,7 @@
 #pragma once
-// The node pass's loop body, written once for both engines: node i's internal force (the gather
-// of its element-corner entries, in the fixed incidence order), its central-difference update and
-// the checks on the result. The CPU's OpenMP chunks (engine/cpu_engine.cpp) and the CUDA node and tile
+// The node pass's loop body, written once for both engines: node i's internal force (the gather of
+// its element-corner entries, in the fixed incidence order), its central-difference update and the
+// checks on the result. The CPU's OpenMP chunks (engine/cpu_engine.cpp) and the CUDA node and tile
 // kernels (cuda/node_kernels.cuh, cuda/tile_kernel.cuh) call these.
 #include <cmath>
 #include <cstdint>

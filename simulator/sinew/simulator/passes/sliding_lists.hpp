@@ -1,9 +1,9 @@
 #pragma once
 // Sliding candidate lists (Verlet lists with a skin, exact: sliding_grid.hpp) and the sliding
-// constraint of one node, written once for both engines: the CPU runs them inline in its
-// constraint pass (engine/cpu_engine.cpp), the GPU in its constraint kernel and, ahead of a step, in its list
-// refresh kernel (cuda/constraint_kernels.cuh). docs/cuda-backend.md, "Sliding", has the design
-// and its measurements.
+// constraint of one node, written once for both engines: the CPU runs them inline in its constraint
+// pass (engine/cpu_engine.cpp), the GPU in its constraint kernel and, ahead of a step, in its list
+// refresh kernel (cuda/constraint_kernels.cuh). docs/cuda-backend.md, "Sliding", has the design and
+// its measurements.
 #include <cmath>
 #include <cstdint>
 
