@@ -4,6 +4,9 @@
 // a token-protected server, and path traversal in static-file requests. Each gets an error reply
 // or is dropped; the server keeps serving; the engine stays finite; nothing outside the page's
 // folder is served. And Ctrl-C on the tool while recording leaves a readable results file.
+// Issue #33, a hostile page in the user's browser and other abuse: foreign Host and Origin
+// headers, simultaneous handshakes against max_clients, weak tokens, the accept loop out of file
+// descriptors, and recordings that would share a folder.
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
@@ -630,6 +633,72 @@ TEST_F(LiveServer, OutOfDescriptorsTheServerWaitsInsteadOfSpinning) {
   http::response<http::string_body> res;
   http::read(s, b, res);
   EXPECT_EQ(res.result_int(), 200u);
+}
+
+// The status of the client's session: the recording folder once it is (on) or is not (off).
+std::string wait_for_recording(Client& c, bool on) {
+  for (int k = 0; k < 2000; ++k) {
+    const json s = c.next("status");
+    if (on && !s["recording"].is_null()) return s["recording"].get<std::string>();
+    if (!on && s["recording"].is_null()) return {};
+  }
+  throw std::runtime_error(on ? "no recording started" : "the recording did not stop");
+}
+
+void record(Client& c, bool on) {
+  c.send(on ? R"({"type": "record", "on": true})" : R"({"type": "record", "on": false})");
+}
+
+TEST_F(LiveServer, ASecondRecordingGetsAFolderOfItsOwn) {
+  SessionOptions so;
+  so.record_dir = dir_ / "rec";  // sinew-live --record DIR: recording from the start
+  start_with({}, so);
+  Client c(port_);
+  EXPECT_EQ(wait_for_recording(c, true), dir_ / "rec");
+  record(c, false);
+  wait_for_recording(c, false);
+  record(c, true);
+  EXPECT_EQ(wait_for_recording(c, true), dir_ / "rec-2");
+  record(c, false);
+  wait_for_recording(c, false);
+  for (const char* rec : {"rec", "rec-2"}) {
+    EXPECT_GE(postprocess::read_surface(dir_ / (std::string(rec) + "/results.h5")).frame_count(),
+              1u)
+        << rec;
+    EXPECT_TRUE(std::filesystem::exists(dir_ / (std::string(rec) + "/scene.yaml"))) << rec;
+  }
+}
+
+TEST_F(LiveServer, RecordingsStartedInOneSecondGetFoldersOfTheirOwn) {
+  start();
+  // The default folder is named by the second (sinew-live-recording-<unix time>) in the working
+  // directory: the folders of the next seconds exist already, as another recording left them.
+  const std::filesystem::path cwd = std::filesystem::current_path(), work = dir_ / "work";
+  std::filesystem::create_directories(work);
+  std::filesystem::current_path(work);
+  struct Back {
+    std::filesystem::path to;
+    ~Back() { std::filesystem::current_path(to); }
+  } back{cwd};
+  const auto now = std::chrono::duration_cast<std::chrono::seconds>(
+                       std::chrono::system_clock::now().time_since_epoch())
+                       .count();
+  std::vector<std::string> taken;
+  for (auto t = now - 1; t <= now + 30; ++t) {
+    taken.push_back(fmt::format("sinew-live-recording-{}", t));
+    std::filesystem::create_directory(taken.back());
+    std::ofstream(taken.back() + "/results.h5") << "another recording's\n";
+  }
+  Client c(port_);
+  record(c, true);
+  const std::string folder = wait_for_recording(c, true);
+  record(c, false);
+  wait_for_recording(c, false);
+  EXPECT_EQ(std::find(taken.begin(), taken.end(), folder), taken.end()) << folder;
+  EXPECT_EQ(folder.substr(folder.size() - 2), "-2") << folder;
+  EXPECT_GE(postprocess::read_surface(folder + "/results.h5").frame_count(), 1u);
+  for (const auto& t : taken)
+    EXPECT_EQ(simulator::testing::read_file(t + "/results.h5"), "another recording's\n") << t;
 }
 
 TEST(LiveTool, MissingThreeJsSaysHowToInstallIt) {
