@@ -152,7 +152,12 @@ int main(int argc, char** argv) {
     net::io_context ioc;
     websocket::stream<tcp::socket> ws(ioc);
     ws.next_layer().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server.port()));
-    ws.handshake("127.0.0.1", "/ws");
+    // The server answers to its own Host and Origin only (docs/live.md, "Threat model").
+    const std::string own = fmt::format("127.0.0.1:{}", server.port());
+    ws.set_option(websocket::stream_base::decorator([own](websocket::request_type& req) {
+      req.set(boost::beast::http::field::origin, "http://" + own);
+    }));
+    ws.handshake(own, "/ws");
     std::mutex m;  // guards sent, latency, reset_latency, last_seen, pending_reset, max_time
     std::vector<Sent> sent(1);
     std::vector<double> latency, reset_latency;

@@ -4,7 +4,8 @@
 //
 //   sinew-live [SCENE] [--play RESULTS.h5] [--device auto|cpu|cuda] [--port P] [--host H] [--record DIR] [--explain]
 //              [--precision float|double] [--threads N] [--paused] [--frame-rate F] [--speed S]
-//              [--surface NAME] [--up z|y] [--token T] [--web DIR] [--three DIR] [-q] [-v]
+//              [--surface NAME] [--up z|y] [--token T] [--allow-host NAME]... [--web DIR]
+//              [--three DIR] [-q] [-v]
 //
 // Exit status: 0 stopped (Ctrl-C), 1 bad input or I/O error, 2 bad command line.
 #include <fmt/format.h>
@@ -18,6 +19,7 @@
 #include "sinew/common/log.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
+#include "sinew/live/own_origin.hpp"
 #include "sinew/live/playback.hpp"
 #include "sinew/live/server.hpp"
 #include "sinew/live/session.hpp"
@@ -51,8 +53,18 @@ int main(int argc, char** argv) {
   app.add_option("--host", server.host,
                  "Address to bind (default 127.0.0.1; any other needs the printed token)");
   app.add_option("--port", server.port, "Port (0: any free port)")->default_val(8080);
+  // A weak token or a bad name is refused with the command line, before the model loads (and
+  // before anything binds), whatever the host: the Server's own rules (server.hpp, own_origin.hpp).
   app.add_option("--token", server.token,
-                 "Access token to require (default: a random one for non-loopback binds)");
+                 fmt::format("Access token to require, at least {} characters of letters, "
+                             "digits, '-', '.', '_', '~' (default: a random one for non-loopback "
+                             "binds)",
+                             live::kMinTokenLength))
+      ->check(CLI::Validator([](std::string& t) { return live::token_problem(t); }, "TOKEN"));
+  app.add_option("--allow-host", server.allowed_hosts,
+                 "A host name the server also answers to (the browser's address bar without the "
+                 "port, e.g. gpu-server.lan), besides 127.0.0.1, localhost, [::1] and --host")
+      ->check(CLI::Validator([](std::string& n) { return live::host_name_problem(n); }, "NAME"));
   app.add_option("--record", so.record_dir,
                  "Record from the start into this folder (results.h5, steering_log.json, "
                  "scene.yaml that reproduces the session)");

@@ -53,7 +53,7 @@ run(env.LIVE_TEST_MODEL, [work]);
 // the URL's ?token= and the cookie the server sets.
 const server = spawn(env.SINEW_LIVE, ['live_box.yaml', '--device', 'cpu', '--threads', '1',
                                       '--port', '0', '--frame-rate', '20', '--speed', '0.1',
-                                      '--token', 'page-test-token'], { cwd: work });
+                                      '--token', 'page-test-token-2026'], { cwd: work });
 let out = '';
 server.stdout.on('data', (d) => { out += d; });
 server.stderr.on('data', (d) => { out += d; });
@@ -61,7 +61,7 @@ let browser, player;
 try {
   for (let k = 0; k < 300 && !/open (http\S+)/.test(out); ++k) await sleep(50);
   const url = (out.match(/open (http\S+)/) || [])[1];
-  check(url && url.endsWith('?token=page-test-token'), `sinew-live printed its URL (${url})`);
+  check(url && url.endsWith('?token=page-test-token-2026'), `sinew-live printed its URL (${url})`);
 
   browser = await puppeteer.launch({
     executablePath: env.CHROMIUM, headless: true,

@@ -1,6 +1,7 @@
 #include "sinew/live/server.hpp"
 
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <deque>
 #include <fstream>
@@ -15,6 +16,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/live/own_origin.hpp"
 
 namespace sinew::live {
 
@@ -24,6 +26,7 @@ namespace websocket = beast::websocket;
 namespace net = boost::asio;
 using tcp = net::ip::tcp;
 using Clock = std::chrono::steady_clock;
+constexpr std::chrono::milliseconds kAcceptRetry{100};
 
 bool is_loopback_host(const std::string& host) {
   if (host == "localhost") return true;
@@ -37,6 +40,21 @@ std::string make_token() {
   std::string t;
   for (int k = 0; k < 4; ++k) t += fmt::format("{:08x}", rd());
   return t;
+}
+
+std::string token_problem(const std::string& token) {
+  if (token.size() < kMinTokenLength)
+    return fmt::format(
+        "an access token of {} characters is guessed quickly: give at least {} (sinew-live makes "
+        "one of 32 random hex digits when --token is not given)",
+        token.size(), kMinTokenLength);
+  if (token.size() > 256) return "an access token longer than 256 characters";
+  for (const char c : token)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.' || c == '_' ||
+          c == '~'))
+      return "an access token has letters, digits, '-', '.', '_' and '~' only (it travels in the "
+             "URL and a cookie as it is)";
+  return {};
 }
 
 namespace {
@@ -89,16 +107,45 @@ struct Server::Impl : std::enable_shared_from_this<Server::Impl> {
   tcp::acceptor acceptor;
   std::vector<std::shared_ptr<WsClient>> clients;  // I/O thread only; front() steers
   std::atomic<std::size_t> client_count{0};
+  // The clients joined plus the handshakes admitted and not finished (I/O thread only): a slot is
+  // taken before the 101 is sent, so handshakes read together cannot all pass max_clients.
+  std::size_t admitted = 0;
+  OwnHost own;  // the names a Host or Origin may give (set once bound)
+  // When accept() fails for want of descriptors (EMFILE, ENFILE) the listening socket stays
+  // readable: retrying at once spins a core. It waits this timer instead, and says so once.
+  net::steady_timer accept_retry{ioc};
+  bool accept_failing = false;
   // The cookie that carries the token for the page's own requests (its scripts, styles and
   // three.js, which the URL's ?token= does not reach): named by the port, so two servers on one
   // host (cookies ignore ports) keep theirs apart. Set once bound.
   std::string cookie;
 
   void accept();
+  bool admit() {
+    if (admitted >= options.max_clients) return false;
+    ++admitted;
+    return true;
+  }
+  void release_slot() { --admitted; }
   void join(const std::shared_ptr<WsClient>& c);
   void leave(WsClient* c);
   bool steers(const WsClient* c) const { return !clients.empty() && clients.front().get() == c; }
   void broadcast(std::shared_ptr<const std::string> msg, bool binary);
+  // `local`: the address the connection arrived at.
+  bool own_host(const http::request<http::string_body>& req, const std::string& local) const {
+    if (req.count(http::field::host) != 1) return false;
+    const auto h = req[http::field::host];
+    return is_own_host(std::string_view(h.data(), h.size()), own, local);
+  }
+  bool own_origin(const http::request<http::string_body>& req, const std::string& local) const {
+    const auto n = req.count(http::field::origin);
+    // No browser leaves the Origin out of a WebSocket handshake: without one it is a program,
+    // let in only when it showed the token (authorized() passed).
+    if (n == 0) return !options.token.empty();
+    if (n != 1) return false;
+    const auto o = req[http::field::origin];
+    return is_own_origin(std::string_view(o.data(), o.size()), own, local);
+  }
   bool authorized(const http::request<http::string_body>& req) const {
     if (options.token.empty()) return true;
     const auto auth = req[http::field::authorization];
@@ -123,8 +170,12 @@ class WsClient : public std::enable_shared_from_this<WsClient> {
   void start(http::request<http::string_body> req) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(kMaxMessageBytes);
+    // The slot admit() took is this client's from here: given back on failure or at leave().
     ws_.async_accept(req, [self = shared_from_this()](beast::error_code ec) {
-      if (ec) return;
+      if (ec) {
+        self->server_->release_slot();
+        return;
+      }
       self->open_ = true;
       self->server_->join(self);
       self->read();
@@ -260,7 +311,11 @@ namespace {
 class HttpClient : public std::enable_shared_from_this<HttpClient> {
  public:
   HttpClient(tcp::socket socket, std::shared_ptr<Server::Impl> server)
-      : stream_(std::move(socket)), server_(std::move(server)) {}
+      : stream_(std::move(socket)), server_(std::move(server)) {
+    beast::error_code ec;
+    const auto at = stream_.socket().local_endpoint(ec);
+    if (!ec) local_ = at.address().to_string();
+  }
 
   void read() {
     parser_.emplace();
@@ -282,6 +337,15 @@ class HttpClient : public std::enable_shared_from_this<HttpClient> {
       return;
     }
     request_ = parser_->release();
+    // The Host first: a page that made its own name resolve to this machine (DNS rebinding) gets
+    // nothing, not even the token check's answer.
+    if (!server_->own_host(request_, local_)) {
+      reply(http::status::forbidden,
+            "wrong Host: this server answers to 127.0.0.1, localhost, [::1] and its bound address, "
+            "with its port (sinew-live --allow-host NAME adds a name)",
+            false);
+      return;
+    }
     if (!server_->authorized(request_)) {
       reply(http::status::forbidden,
             "missing or wrong access token (open the URL sinew-live printed, with ?token=...)",
@@ -295,7 +359,12 @@ class HttpClient : public std::enable_shared_from_this<HttpClient> {
         reply(http::status::not_found, "no WebSocket here (use /ws)", false);
         return;
       }
-      if (server_->clients.size() >= server_->options.max_clients) {
+      if (!server_->own_origin(request_, local_)) {
+        reply(http::status::forbidden,
+              "cross-origin WebSocket refused: only this server's own page may connect", false);
+        return;
+      }
+      if (!server_->admit()) {
         reply(http::status::service_unavailable, "too many clients", false);
         return;
       }
@@ -339,6 +408,7 @@ class HttpClient : public std::enable_shared_from_this<HttpClient> {
   void reply(http::status status, const std::string& text, bool keep_alive) {
     auto res = std::make_shared<http::response<http::string_body>>(status, 11);
     res->set(http::field::content_type, "text/plain; charset=utf-8");
+    res->set("X-Content-Type-Options", "nosniff");
     res->keep_alive(keep_alive);
     res->body() = text + "\n";
     res->prepare_payload();
@@ -361,20 +431,44 @@ class HttpClient : public std::enable_shared_from_this<HttpClient> {
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   http::request<http::string_body> request_;
+  std::string local_;  // the address the connection arrived at (own_host, own_origin)
 };
+
+// accept() failures that last until some descriptor or memory is freed; others (a connection reset
+// before it was accepted) concern one connection, and the next accept goes on at once.
+bool out_of_resources(const beast::error_code& ec) {
+  namespace errc = boost::system::errc;
+  return ec == errc::too_many_files_open || ec == errc::too_many_files_open_in_system ||
+         ec == errc::no_buffer_space || ec == errc::not_enough_memory;
+}
 
 }  // namespace
 
 void Server::Impl::accept() {
-  acceptor.async_accept(net::make_strand(ioc),
-                        [self = shared_from_this()](beast::error_code ec, tcp::socket socket) {
-                          if (ec) {
-                            if (ec == net::error::operation_aborted) return;
-                          } else {
-                            std::make_shared<HttpClient>(std::move(socket), self)->read();
-                          }
-                          if (self->acceptor.is_open()) self->accept();
-                        });
+  acceptor.async_accept(
+      net::make_strand(ioc), [self = shared_from_this()](beast::error_code ec, tcp::socket socket) {
+        if (ec == net::error::operation_aborted) return;
+        if (!ec && self->accept_failing) {
+          self->accept_failing = false;
+          log::info("sinew-live: accepting connections again");
+        }
+        if (!ec) std::make_shared<HttpClient>(std::move(socket), self)->read();
+        if (!self->acceptor.is_open()) return;
+        if (!out_of_resources(ec)) {
+          self->accept();
+          return;
+        }
+        if (!self->accept_failing)
+          log::warn(
+              "sinew-live: cannot accept a connection ({}): trying again every {} ms until it can "
+              "(raise `ulimit -n`, or close other clients)",
+              ec.message(), kAcceptRetry.count());
+        self->accept_failing = true;
+        self->accept_retry.expires_after(kAcceptRetry);
+        self->accept_retry.async_wait([self](beast::error_code wait) {
+          if (!wait && self->acceptor.is_open()) self->accept();
+        });
+      });
 }
 
 void Server::Impl::join(const std::shared_ptr<WsClient>& c) {
@@ -391,6 +485,7 @@ void Server::Impl::leave(WsClient* c) {
   const bool was_steering = steers(c);
   std::erase_if(clients, [&](const auto& p) { return p.get() == c; });
   client_count = clients.size();
+  release_slot();
   if (was_steering && !clients.empty())
     clients.front()->send_text("{\"type\": \"role\", \"steering\": true}");
 }
@@ -403,6 +498,12 @@ void Server::Impl::broadcast(std::shared_ptr<const std::string> msg, bool binary
 Server::Server(Session& session, ServerOptions options)
     : impl_(std::make_shared<Impl>(session, std::move(options))) {
   auto& o = impl_->options;
+  if (!o.token.empty())
+    if (const auto problem = token_problem(o.token); !problem.empty())
+      throw ConfigError("", "--token", problem);
+  for (auto& name : o.allowed_hosts)
+    if (const auto problem = host_name_problem(name); !problem.empty())
+      throw ConfigError("", "--allow-host", fmt::format("'{}': {}", name, problem));
   beast::error_code ec;
   const auto address = net::ip::make_address(o.host == "localhost" ? "127.0.0.1" : o.host, ec);
   if (ec) throw ConfigError("", "--host", fmt::format("'{}' is not an IP address", o.host));
@@ -414,6 +515,7 @@ Server::Server(Session& session, ServerOptions options)
   if (!ec) a.listen(net::socket_base::max_listen_connections, ec);
   if (ec) throw IoError(fmt::format("{}:{}", o.host, o.port), "", "cannot listen: " + ec.message());
   impl_->cookie = fmt::format("sinew_live_{}", port());
+  impl_->own = {port(), o.host, o.allowed_hosts};
   std::weak_ptr<Impl> weak = impl_;
   session.set_sink([weak](std::shared_ptr<const std::string> msg, bool binary) {
     if (auto s = weak.lock()) net::post(s->ioc, [s, msg, binary] { s->broadcast(msg, binary); });
@@ -457,6 +559,7 @@ void Server::stop() {
   net::post(s->ioc, [s] {
     beast::error_code ec;
     s->acceptor.close(ec);
+    s->accept_retry.cancel();
     const auto clients = s->clients;
     for (const auto& c : clients) c->close("server stopping");
     s->ioc.stop();

@@ -22,6 +22,31 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A new folder for a recording: `base` when it does not exist yet, else base-2, base-3, … . Each
+// try is one mkdir, which fails on a folder that exists, so two recordings (one session recording
+// twice into its --record folder, two started in the same second under the default name, two
+// processes in one working directory) never share a folder, and none replaces another's files.
+std::string claim_recording_folder(const std::string& base) {
+  fs::path path = fs::path(base).lexically_normal();
+  if (!path.has_filename()) path = path.parent_path();  // "rec/" as "rec"
+  std::error_code ec;
+  if (path.has_parent_path()) {
+    fs::create_directories(path.parent_path(), ec);
+    if (ec) throw IoError(base, "", "cannot create the recording folder: " + ec.message());
+  }
+  constexpr int kTries = 1000;
+  for (int k = 1; k <= kTries; ++k) {
+    const fs::path p = k == 1 ? path : fs::path(fmt::format("{}-{}", path.string(), k));
+    if (fs::create_directory(p, ec)) return p.string();
+    if (ec && ec != std::errc::file_exists)
+      throw IoError(p.string(), "", "cannot create the recording folder: " + ec.message());
+  }
+  throw IoError(base, "",
+                fmt::format("cannot create the recording folder: it and {} numbered ones "
+                            "beside it exist already",
+                            kTries - 1));
+}
+
 SurfaceView make_surface_view(const formats::Model& model, const std::string& name) {
   const formats::Surface* chosen = nullptr;
   for (const auto& s : model.surfaces) {
@@ -360,10 +385,8 @@ void Session::apply(const Command& c) {
   changed_ = true;
 }
 
-void Session::start_recording(const std::string& dir) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw IoError(dir, "", "cannot create the recording folder: " + ec.message());
+void Session::start_recording(const std::string& base) {
+  const std::string dir = claim_recording_folder(base);
   const auto& r = run_.resolved;
   writer_ = std::make_unique<simulator::ResultsWriter>(
       dir, *run_.model, simulator::results_options(run_.scene, run_.summary.scene_file));

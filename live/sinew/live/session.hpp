@@ -46,7 +46,9 @@ struct SessionOptions {
   double frame_rate = 30;        // frames per second streamed (at most)
   double chunk_seconds = 0.004;  // wall time per chunk of steps (command latency)
   double max_speed = 0;          // simulated s per wall s at most (0: as fast as it goes)
-  std::string record_dir;        // record from the start into this folder ("" none)
+  // Record from the start into this folder ("" none); this folder, or DIR-2, DIR-3, … when it
+  // exists, for every recording (no folder is used twice).
+  std::string record_dir;
   bool start_paused = false;
   bool pause_at_end = true;        // pause once when the scene's duration is reached
   std::string surface;             // visual surface to stream ("" the first visual one)
@@ -120,7 +122,7 @@ class Session {
   // Keeps msg as the latest of its kind (for new clients) and hands it to the sink.
   void publish(std::shared_ptr<const std::string> msg, bool binary,
                std::shared_ptr<const std::string>& latest);
-  void start_recording(const std::string& dir);
+  void start_recording(const std::string& base);  // into a new folder (claim_recording_folder)
   void record_frame_if_due();
   void finish_recording();
   std::vector<formats::Index> nodes_near(const std::array<double, 3>& point, double radius);
