@@ -566,5 +566,34 @@ TEST(SceneResolve, MusclesWithoutAModelMuscleAreAnError) {
   EXPECT_THROW(resolve_scene(scene_for("effects: [elasticity, muscles]\n"), model), ConfigError);
 }
 
+// Issue 34: a model's sliding bindings or muscles that the scene's effects leave out are named
+// (ResolvedScene::left_out, which the run lists as warnings), not dropped without a word.
+TEST(SceneResolve, WhatTheModelDefinesAndTheSceneLeavesOutIsNamed) {
+  auto model = small_box(true);
+  formats::Surface glide;
+  glide.name = "glide";
+  glide.role = formats::SurfaceRole::sliding;
+  glide.vertices = {{-1, -1, -0.01}, {1, -1, -0.01}, {1, 1, -0.01}};
+  glide.triangles = {{0, 1, 2}};
+  model.surfaces.push_back(glide);
+  const auto surface = static_cast<Index>(model.surfaces.size() - 1);
+  for (Index n = 0; n < 3; ++n) model.sliding.push_back({n, surface, 0.01, 0});
+
+  const auto bare = resolve_scene(scene_for("effects: [elasticity]\n"), model);
+  ASSERT_EQ(bare.left_out.size(), 2u);
+  EXPECT_NE(bare.left_out[0].find("binds 3 nodes to the sliding surface 'glide'"),
+            std::string::npos)
+      << bare.left_out[0];
+  EXPECT_NE(bare.left_out[0].find("leave out 'sliding'"), std::string::npos);
+  EXPECT_NE(bare.left_out[1].find("the model has 1 muscle, but"), std::string::npos)
+      << bare.left_out[1];
+
+  const auto full = resolve_scene(scene_for("effects: [elasticity, muscles, sliding]\n"), model);
+  EXPECT_TRUE(full.left_out.empty());
+  // A model with neither says nothing.
+  EXPECT_TRUE(
+      resolve_scene(scene_for("effects: [elasticity]\n"), small_box(false)).left_out.empty());
+}
+
 }  // namespace
 }  // namespace sinew::simulator

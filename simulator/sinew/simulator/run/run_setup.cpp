@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "sinew/common/error.hpp"
+#include "sinew/common/log.hpp"
 #include "sinew/common/yaml_reader.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/simulator/engine/cpu_engine.hpp"
@@ -151,6 +152,10 @@ LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>&
   summary.dt_reason = plan.dt_reason;
   summary.steps_planned = plan.steps;
   summary.warnings = plan.warnings;
+  for (const auto& note : r.resolved.left_out) {
+    log::warn("{}", note);
+    summary.warnings.push_back(note);
+  }
   for (const auto& p : r.resolved.probes) {
     if (p.distance > model.grid.voxel_size) {
       summary.warnings.push_back(

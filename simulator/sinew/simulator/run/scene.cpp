@@ -603,6 +603,35 @@ std::vector<Index> resolve_node_set(const Scene& scene, const formats::Model& mo
       fmt::format("unknown node set '{}' (known: {})", name, set_names(scene, model)));
 }
 
+namespace {
+
+// The model's sliding bindings and muscles that the scene's effects leave out (ResolvedScene::
+// left_out). Rigid nodes need no entry: they are always held.
+std::vector<std::string> left_out_effects(const Scene& scene, const formats::Model& model) {
+  std::vector<std::string> notes;
+  if (!scene.has(Effect::sliding) && !model.sliding.empty()) {
+    std::vector<std::string> surfaces;
+    for (const auto& b : model.sliding) {
+      const auto& name = model.surfaces.at(static_cast<std::size_t>(b.surface)).name;
+      if (std::find(surfaces.begin(), surfaces.end(), name) == surfaces.end())
+        surfaces.push_back(name);
+    }
+    notes.push_back(fmt::format(
+        "the model binds {} nodes to the sliding surface{} '{}', but the scene's effects leave "
+        "out 'sliding': those nodes move freely instead of gliding (add sliding to effects)",
+        model.sliding.size(), surfaces.size() == 1 ? "" : "s", fmt::join(surfaces, "', '")));
+  }
+  if (!scene.has(Effect::muscles) && !model.muscles.empty()) {
+    notes.push_back(fmt::format(
+        "the model has {} muscle{}, but the scene's effects leave out 'muscles': their fibres add "
+        "no stress, active or passive (add muscles to effects)",
+        model.muscles.size(), model.muscles.size() == 1 ? "" : "s"));
+  }
+  return notes;
+}
+
+}  // namespace
+
 ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
                             const ResolveOptions& options) {
   if (model.node_count() == 0 || model.element_count() == 0) {
@@ -637,6 +666,7 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
   if (s.effects.muscles && model.muscles.empty()) {
     throw ConfigError(scene.file, "effects", "'muscles' is listed but the model has no muscles");
   }
+  out.left_out = left_out_effects(scene, model);
 
   s.precision = options.precision ? *options.precision : scene.precision;
   s.threads = options.threads;

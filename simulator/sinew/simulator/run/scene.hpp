@@ -153,6 +153,11 @@ struct ResolvedScene {
   double probe_interval = 0;   // s; 0: every step
   std::vector<OutputField> fields;
   std::vector<std::string> effects;  // effect names, in the scene's order
+  // What the model defines and the scene's effects leave out, one sentence each (sliding bindings
+  // without `sliding`, muscles without `muscles`): simulating only what the scene names is right,
+  // doing it without a word is not. The run lists them as warnings (log, --explain,
+  // run_summary.json).
+  std::vector<std::string> left_out;
 };
 
 // Options given on the command line that override the scene.
