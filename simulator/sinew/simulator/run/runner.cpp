@@ -143,6 +143,14 @@ RunResult run_scene(const RunOptions& options) {
           "the checkpoint was written by another scene, model or precision (the scene file, the "
           "model file and the precision must be exactly those of the interrupted run)");
     }
+    // A step past the plan "completed" at once with a time far beyond the scene's (a step of 1e15
+    // gave 1.24e10 s simulated: issue 33); the engine checks time against step · Δt.
+    if (ckpt.state.step > plan.steps) {
+      throw ConfigError(options.restart, "step",
+                        fmt::format("step {} is past the {} steps this run plans (duration / Δt): "
+                                    "not a checkpoint of this run",
+                                    ckpt.state.step, plan.steps));
+    }
     try {
       backend->restore(ckpt.state);
     } catch (const ConfigError& e) {
