@@ -3,10 +3,12 @@
 // JSON run summary (checkpoints: engine/checkpoint_test.cpp).
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -393,6 +395,48 @@ TEST(ResultsWriter, AKilledProcessKeepsEveryFrameItFlushed) {
   H5Fclose(file);
   const auto grids = check_xdmf(dir / "results.xdmf", dir / "results.h5");
   EXPECT_EQ(grids.at("volume"), 2);
+}
+
+// A write that fails part way (a full disk; here a file-size limit, which fails HDF5's writes as
+// ENOSPC does) never leaves results.h5 under its name: a full disk left one that failed to open
+// ("addr overflow": issue 33). With no complete frame it is removed, else moved to
+// results.h5.partial; the XDMF indexes naming it go, and the error says so.
+TEST(ResultsWriter, AFailedWriteLeavesNoResultsUnderTheirName) {
+  const auto model = small_box(false, true);
+  for (const rlim_t limit : {rlim_t{4096}, rlim_t{96 * 1024}}) {
+    TempDir dir("results_full_" + std::to_string(limit));
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      std::signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails with EFBIG instead
+      const rlimit r{limit, limit};
+      setrlimit(RLIMIT_FSIZE, &r);
+      int frames = 0;
+      try {
+        ResultsWriter w(dir.str(), model, all_fields());
+        for (; frames < 1000; ++frames)
+          w.append_frame(0.5 * frames, frames, linear_field(model, frames),
+                         fields_for(model, frames));
+      } catch (const IoError& e) {
+        const std::string m = e.what();
+        const bool said =
+            m.find(frames == 0 ? "was removed" : "results.h5.partial") != std::string::npos;
+        _exit(said ? (frames == 0 ? 10 : 11) : 2);
+      }
+      _exit(1);  // 1000 frames under the limit: the limit did not bite
+    }
+    int status = 0;
+    waitpid(child, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status)) << limit;
+    const int code = WEXITSTATUS(status);
+    ASSERT_TRUE(code == 10 || code == 11) << "limit " << limit << ": child status " << code;
+    EXPECT_FALSE(std::filesystem::exists(dir / "results.h5")) << limit;
+    EXPECT_FALSE(std::filesystem::exists(dir / "results.xdmf")) << limit;
+    EXPECT_FALSE(std::filesystem::exists(dir / "results_surface_skin.xdmf")) << limit;
+    EXPECT_EQ(std::filesystem::exists(dir / "results.h5.partial"), code == 11) << limit;
+    for (const auto& entry : std::filesystem::directory_iterator(dir.str()))
+      EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << entry.path();
+  }
 }
 
 TEST(ResultsWriter, ResumeDropsFramesAfterTheCheckpoint) {
