@@ -16,8 +16,10 @@ files), runs each tool on each variant under a timeout, and classifies every run
   crash    killed by a signal, an abort, "terminate called", a sanitizer report
   hang     still running at the timeout
   partial  a failed run left an output under its final name, or any run left a .tmp- file
+  silent   a restart from a checkpoint whose state had one bit flipped (in /u, /u_prev,
+           /sliding_triangle, or the step, time or dt attribute) exited 0: damage went unnoticed
 
-Exit status: 0 when no crash, hang or partial was found, 1 otherwise. The seed makes the variants
+Exit status: 0 when no crash, hang, partial or silent was found, 1 otherwise. The seed makes the variants
 reproducible: `--seed 1 --variants 40` gives the same files on every machine.
 
   scripts/fuzz_inputs.py --build build/dev --work /tmp/sinew-fuzz --variants 40
@@ -493,7 +495,31 @@ def h5_garbage(rng, data):
 H5_BYTES = [h5_truncate, h5_bitflip, h5_garbage]
 
 
-def make_h5_variant(rng, seed_path, out_path):
+def state_flip(rng, f):
+    """One bit of a checkpoint's state flipped in place, keeping every attribute (its digests):
+    what a bad sector does. A restart must refuse it (issue 33: it restarted with exit 0)."""
+    names = [n for n in ("u", "u_prev", "sliding_triangle") if n in f and f[n].size]
+    if rng.random() < 0.25 or not names:
+        key = rng.choice(["step", "time", "dt"])
+        value = np.array(f.attrs[key])
+        raw = value.view(np.uint64 if value.dtype.itemsize == 8 else np.uint32).copy()
+        raw ^= raw.dtype.type(1) << raw.dtype.type(rng.randrange(8 * value.dtype.itemsize))
+        f.attrs.modify(key, raw.view(value.dtype))
+        return f"@{key}"
+    name = rng.choice(names)
+    data = f[name][...]
+    flat = data.reshape(-1).view(np.uint64 if data.dtype.itemsize == 8 else np.uint32)
+    i = rng.randrange(flat.size)
+    flat[i] ^= flat.dtype.type(1) << flat.dtype.type(rng.randrange(8 * data.dtype.itemsize))
+    f[name][...] = data
+    return f"/{name}[{i}]"
+
+
+def make_h5_variant(rng, seed_path, out_path, state_flips=False):
+    if state_flips and rng.random() < 0.3:
+        shutil.copy(seed_path, out_path)
+        with h5py.File(out_path, "r+") as f:
+            return f"state_flip {state_flip(rng, f)}"
     if rng.random() < 0.22:
         fn = rng.choice(H5_BYTES)
         with open(seed_path, "rb") as f:
@@ -550,7 +576,7 @@ SPECIALS = ["directory", "missing", "fifo", "dev_zero"]
 
 class Target:
     def __init__(self, name, kind, seed, variant_name, argv, outputs, extra=(), live=False,
-                 failure_keeps=()):
+                 failure_keeps=(), state_flips=False):
         self.name, self.kind, self.seed = name, kind, seed
         self.variant_name = variant_name  # the variant's file name inside its run folder
         self.argv = argv                  # (build, run_dir) -> argv; the run folder is the cwd
@@ -558,6 +584,7 @@ class Target:
         self.extra = extra                # seed files copied into the run folder
         self.live = live                  # a server: success is its "open http" line
         self.failure_keeps = failure_keeps  # outputs a failed run may keep if valid HDF5
+        self.state_flips = state_flips    # a checkpoint: some variants flip one bit of its state
 
 
 def targets(build, with_voxelizer, live_three):
@@ -579,7 +606,8 @@ def targets(build, with_voxelizer, live_three):
     T.append(Target("simulate_restart", "h5", "checkpoint.h5", "ckpt.h5",
                     lambda b: [sim(b), "scene.yaml", "-o", "run", "--threads", "1", "--restart",
                                "ckpt.h5"],
-                    [], extra=["scene.yaml", "model.h5", "run"], failure_keeps=["run/results.h5"]))
+                    [], extra=["scene.yaml", "model.h5", "run"], failure_keeps=["run/results.h5"],
+                    state_flips=True))
     T.append(Target("export_glb", "h5", "results.h5", "results.h5",
                     lambda b: [tool(b, "postprocess", "sinew-export"), "results.h5", "--glb",
                                "out.glb"], ["out.glb"]))
@@ -621,7 +649,7 @@ def targets(build, with_voxelizer, live_three):
         T.append(Target("simulate_head_restart", "h5", "head_checkpoint.h5", "ckpt.h5",
                         lambda b: [sim(b), "head_scene.yaml", "-o", "hrun", "-q", "--restart",
                                    "ckpt.h5"], [], extra=["head_scene.yaml", "head.h5", "hrun"],
-                        failure_keeps=["hrun/results.h5"]))
+                        failure_keeps=["hrun/results.h5"], state_flips=True))
         T.append(Target("voxelize", "yaml", "vox_spec.yaml", "vox_spec.yaml",
                         lambda b: [tool(b, "voxelizer", "sinew-voxelize"), "vox_spec.yaml", "-o",
                                    "out.h5", "-q", "--threads", "1"], ["out.h5"]))
@@ -654,7 +682,7 @@ def memory_cap(gib):
     return lambda: resource.setrlimit(resource.RLIMIT_DATA, (limit, limit))
 
 
-def run_one(target, build, run_dir, variant_file, timeout, memory_gib):
+def run_one(target, build, run_dir, variant_file, timeout, memory_gib, label=""):
     argv = target.argv(build)
     start = time.time()
     proc = subprocess.Popen(argv, cwd=run_dir, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
@@ -716,6 +744,8 @@ def run_one(target, build, run_dir, variant_file, timeout, memory_gib):
         else:
             base = os.path.basename(variant_file)
             cls = "error" if base in text or variant_file in text else "vague"
+    elif label.startswith("state_flip"):
+        cls = "silent"  # a damaged state restarted as if whole
     else:
         cls = "ok"
     return cls, rc, elapsed, text
@@ -773,16 +803,16 @@ def main():
             if special:
                 label = make_special_variant(special, variant)
             elif target.kind == "h5":
-                label = make_h5_variant(rng, seed_path, variant)
+                label = make_h5_variant(rng, seed_path, variant, target.state_flips)
             else:
                 label = make_yaml_variant(rng, seed_path, variant)
             cls, rc, elapsed, text = run_one(target, build, run_dir, target.variant_name,
-                                             args.timeout, args.memory)
+                                             args.timeout, args.memory, label)
             counts[target.name][cls] += 1
             last = [l for l in text.strip().splitlines() if l.strip()][-1:] or [""]
             records.append({"target": target.name, "variant": i, "mutation": label, "class": cls,
                             "rc": rc, "seconds": round(elapsed, 2), "message": last[0][:300]})
-            if cls in ("crash", "hang", "partial"):
+            if cls in ("crash", "hang", "partial", "silent"):
                 print(f"[{cls}] {target.name} #{i} ({label}) rc={rc}: {text.strip()[-600:]}",
                       flush=True)
             elif not args.keep:
@@ -796,7 +826,7 @@ def main():
     for c in counts.values():
         total.update(c)
     print("total: " + ", ".join(f"{k} {v}" for k, v in sorted(total.items())))
-    return 1 if any(total[k] for k in ("crash", "hang", "partial")) else 0
+    return 1 if any(total[k] for k in ("crash", "hang", "partial", "silent")) else 0
 
 
 if __name__ == "__main__":

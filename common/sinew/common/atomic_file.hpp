@@ -9,6 +9,12 @@
 //
 // The rename is atomic within one file system (the temporary lives in the same folder); there is
 // no fsync, so a power cut may still lose the file, but never leaves a half-written one in view.
+//
+// A signal that ends the process (SIGINT, SIGTERM, SIGHUP) runs no destructor: every tool
+// (tool::run) installs remove_temporaries_on_signal(), whose handler unlinks the temporaries being
+// written, then ends the process by the same signal (`sinew-render --sequence` and `sinew-export`
+// stopped by SIGTERM left their "*.tmp-<pid>" files: issue 33).
+#include <cstddef>
 #include <functional>
 #include <string>
 
@@ -44,7 +50,18 @@ class TemporaryFile {
  private:
   std::string final_, tmp_;
   bool committed_ = false;
+  int slot_ = -1;  // in the registry the signal handler reads, −1 when untracked
 };
+
+// For SIGINT, SIGTERM and SIGHUP whose action is the default (one ignored stays ignored, as under
+// nohup or in a background job): a handler that unlinks the temporary of every TemporaryFile not
+// yet committed or destroyed (unlink(2): async-signal-safe), restores the default action and
+// raises the signal again, so the process ends as it would have (the shell sees the signal).
+// Code that installs its own handlers afterwards (sinew-simulate's checkpoint on Ctrl-C, the live
+// server) replaces this one and cleans up through the destructors as it returns. Idempotent.
+// At most kMaxTrackedTemporaries temporaries are tracked at once; more are written untracked.
+inline constexpr std::size_t kMaxTrackedTemporaries = 256;
+void remove_temporaries_on_signal();
 
 // The reason a write failed, from errno: "no space left on the device (disk full)" for ENOSPC
 // and EDQUOT, else strerror(err).

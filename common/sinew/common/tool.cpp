@@ -2,6 +2,7 @@
 
 #include <exception>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
 
@@ -14,6 +15,8 @@ void report_error(const std::string& tool, const std::string& message) {
 }
 
 int run(const std::string& tool, ExitCodes codes, const std::function<int()>& body) {
+  // A tool ended by a signal removes the files it was writing (atomic_file.hpp).
+  remove_temporaries_on_signal();
   // One catch per exit status; the message is the same form for all of them.
   try {
     return body();

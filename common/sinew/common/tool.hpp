@@ -24,7 +24,9 @@ struct ExitCodes {
 // Logs "<tool>: <message>" at error level (shown unless the level is "off").
 void report_error(const std::string& tool, const std::string& message);
 
-// Runs body() and returns its exit status. An exception escaping it is reported once with
+// Runs body() and returns its exit status. First installs remove_temporaries_on_signal()
+// (atomic_file.hpp): SIGINT, SIGTERM or SIGHUP removes the temporaries of the files being written
+// and ends the process by that signal, unless the tool installs handlers of its own. An exception escaping it is reported once with
 // report_error() as "error: <what>" (a sinew::Error, whose message names file, field and problem,
 // or any other std::exception) and gives codes.config for ConfigError, codes.instability for
 // InstabilityError, else kExitError.

@@ -18,6 +18,7 @@
 #include "sim_io_support.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/formats/model_file.hpp"
+#include "sinew/simulator/engine/checkpoint.hpp"
 #include "sinew/simulator/engine/cuda_backend.hpp"
 #include "sinew/simulator/run/runner.hpp"
 
@@ -227,6 +228,82 @@ TEST(Runner, RestartRefusesAnotherScene) {
   write_file(dir / "scene.yaml", kMuscleScene);
   second.precision = Precision::float32;
   EXPECT_THROW(run_scene(second), ConfigError);
+}
+
+// The checkpoint of `scene` run into `out` and interrupted at step 30.
+std::string checkpoint_at_step_30(const std::string& scene, const std::string& out) {
+  auto first = options_for(scene, out);
+  first.stop_at_step = 30;
+  EXPECT_EQ(run_scene(first).summary.status, "interrupted");
+  return out + "/checkpoint.h5";
+}
+
+// A checkpoint damaged on disk (one bit of /u) is refused by name before anything is restored or
+// written; it restarted with exit 0 and a last frame off by 2.4e-5 m (issue 33).
+TEST(Runner, RestartRefusesACheckpointWithAFlippedBit) {
+  TempDir dir("restart_flip");
+  const std::string scene = write_muscle_scene(dir);
+  const std::string ckpt = checkpoint_at_step_30(scene, dir / "out");
+  {
+    const hid_t f = H5Fopen(ckpt.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    const hid_t ds = H5Dopen2(f, "/u", H5P_DEFAULT);
+    const hid_t space = H5Dget_space(ds);
+    std::vector<double> u(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+    ASSERT_GE(H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, u.data()), 0);
+    std::uint64_t bits;
+    std::memcpy(&bits, &u[u.size() - 1], sizeof bits);
+    bits ^= std::uint64_t{1} << 40;
+    std::memcpy(&u[u.size() - 1], &bits, sizeof bits);
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, u.data()), 0);
+    H5Sclose(space);
+    H5Dclose(ds);
+    H5Fclose(f);
+  }
+  const auto results_before = read_file(dir / "out/results.h5");
+  auto second = options_for(scene, dir / "out");
+  second.restart = ckpt;
+  try {
+    run_scene(second);
+    FAIL() << "a damaged checkpoint was restarted";
+  } catch (const FormatError& e) {
+    EXPECT_EQ(e.file(), ckpt);
+    EXPECT_EQ(e.field(), "/u");
+  }
+  EXPECT_EQ(read_file(dir / "out/results.h5"), results_before);
+}
+
+// A state whose digests are intact but whose step, time and Δt disagree with each other or with
+// the run: a step of 1e15 "completed" at once with 1.24e10 s simulated (issue 33).
+TEST(Runner, RestartRefusesAStepOrTimeThatDoesNotFitTheRun) {
+  TempDir dir("restart_clock");
+  const std::string scene = write_muscle_scene(dir);
+  const std::string ckpt = checkpoint_at_step_30(scene, dir / "out");
+  const auto written = read_checkpoint(ckpt);
+  const auto refused = [&](std::int64_t step, double time, const char* field) {
+    auto c = written;
+    c.state.step = step;
+    c.state.time = time;
+    write_checkpoint(dir / "edited.h5", c);
+    auto second = options_for(scene, dir / "out");
+    second.restart = dir / "edited.h5";
+    try {
+      run_scene(second);
+      ADD_FAILURE() << "restarted at step " << step << ", t = " << time;
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(e.file(), dir / "edited.h5");
+      EXPECT_EQ(e.field(), field) << e.what();
+    }
+  };
+  const double dt = written.state.dt;
+  refused(1'000'000'000'000'000, 1e15 * dt, "step");  // consistent, but past the plan
+  refused(30, 31 * dt, "state.time");                 // one step's time off
+  refused(29, 30 * dt, "state.time");                 // the step changed, not the time
+  refused(30, -30 * dt, "state.time");
+  // The unedited state still restarts.
+  auto second = options_for(scene, dir / "out");
+  second.restart = ckpt;
+  EXPECT_EQ(run_scene(second).summary.status, "completed");
 }
 
 TEST(Runner, CheckpointEveryNStepsKeepsTheLatest) {

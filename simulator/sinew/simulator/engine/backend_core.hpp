@@ -212,7 +212,10 @@ class BackendCore {
   template <typename T>
   State make_state(std::int64_t step, const std::vector<Vec3<T>>& u, const std::vector<Vec3<T>>& up,
                    std::vector<Index> sliding_triangle, double external_work) const;
-  // Checks a state against this run (node count, Δt, sliding bindings); throws ConfigError.
+  // Checks a state against this run; throws ConfigError naming the state's field. Node count,
+  // Δt (exactly this run's), step ≥ 0, |time − step · Δt| ≤ kStateTimeTolerance · max(step · Δt,
+  // Δt), sliding triangle ids inside their surfaces, finite displacements. Not the step against
+  // plan().steps: engines step on past the plan (tests, a live session); a restart checks that.
   void check_state(const State& s) const;
 
   // The kinetic energy at (u, up), J: per node node_kinetic_energy, summed per chunk of 1024 nodes

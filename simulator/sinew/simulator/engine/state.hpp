@@ -10,9 +10,14 @@
 
 namespace sinew::simulator {
 
+// How far a state's time may be from step · Δt, relative (BackendCore::check_state). The engines
+// compute time as double(step) · Δt, so a state they wrote agrees exactly; the tolerance only
+// leaves room for a time computed another way (a sum of steps) and refuses any other step.
+inline constexpr double kStateTimeTolerance = 1e-9;
+
 struct State {
   std::int64_t step = 0;       // n: u holds u(n)
-  double time = 0;             // s, n · Δt (informational; restore recomputes it)
+  double time = 0;             // s, n · Δt (restore checks it against step · Δt)
   double dt = 0;               // s, the Δt of the run that wrote it (restore checks it)
   std::vector<double> u;       // N × 3, m, u(n), node-major (x, y, z per node)
   std::vector<double> u_prev;  // N × 3, m, u(n−1)

@@ -1,6 +1,9 @@
 #include "sinew/simulator/output/probes.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 
 namespace sinew::simulator {
@@ -18,13 +22,21 @@ std::string ProbeWriter::header(ProbeKind kind) {
 
 ProbeWriter::ProbeWriter(const std::string& directory, std::vector<ResolvedProbe> probes)
     : probes_(std::move(probes)) {
-  for (const auto& p : probes_) {
-    paths_.push_back((std::filesystem::path(directory) / file_name(p.name)).string());
-    std::FILE* f = std::fopen(paths_.back().c_str(), "w");
-    if (!f) throw IoError(paths_.back(), "", "cannot create the probe file");
-    files_.push_back(f);
-    std::fprintf(f, "%s\n", header(p.kind).c_str());
-    std::fflush(f);
+  try {
+    for (const auto& p : probes_) {
+      paths_.push_back((std::filesystem::path(directory) / file_name(p.name)).string());
+      std::FILE* f = std::fopen(paths_.back().c_str(), "w");
+      if (!f)
+        throw IoError(paths_.back(), "", "cannot create the probe file: " + write_failure(errno));
+      files_.push_back(f);
+      sizes_.push_back(0);
+      append(files_.size() - 1, header(p.kind) + "\n");
+    }
+  } catch (...) {
+    // No destructor runs for a constructor that throws.
+    for (auto* f : files_)
+      if (f) std::fclose(f);
+    throw;
   }
 }
 
@@ -54,18 +66,45 @@ std::unique_ptr<ProbeWriter> ProbeWriter::resume(const std::string& directory,
       kept += line + "\n";
     }
     in.close();
-    std::FILE* f = std::fopen(path.c_str(), "w");
-    if (!f) throw IoError(path, "", "cannot rewrite the probe file");
-    std::fputs(kept.c_str(), f);
-    std::fflush(f);
+    // In one go: a rewrite cut short by a full disk would lose the rows being kept.
+    write_text_atomically(path, kept);
+    std::FILE* f = std::fopen(path.c_str(), "a");
+    if (!f) throw IoError(path, "", "cannot reopen the probe file: " + write_failure(errno));
     w->paths_.push_back(path);
     w->files_.push_back(f);
+    w->sizes_.push_back(static_cast<std::int64_t>(kept.size()));
   }
   return w;
 }
 
 ProbeWriter::~ProbeWriter() {
-  for (auto* f : files_) std::fclose(f);
+  for (auto* f : files_)
+    if (f) std::fclose(f);
+}
+
+void ProbeWriter::append(std::size_t i, const std::string& text) {
+  std::FILE*& f = files_[i];
+  if (!f) throw IoError(paths_[i], "", "the probe file was closed after a failed write");
+  if (std::fputs(text.c_str(), f) >= 0 && std::fflush(f) == 0) {
+    sizes_[i] += static_cast<std::int64_t>(text.size());
+    return;
+  }
+  const int err = errno;
+  // Part of the text may be on disk: cut the file back to its complete lines, so that no half row
+  // is left under the probe's name (a full disk; truncating needs no space).
+  std::fclose(f);
+  f = nullptr;
+  if (sizes_[i] == 0) {
+    std::remove(paths_[i].c_str());
+    throw IoError(
+        paths_[i], "",
+        "cannot write the probe file's header: " + write_failure(err) + "; the file was removed");
+  }
+  const bool cut = ::truncate(paths_[i].c_str(), static_cast<off_t>(sizes_[i])) == 0;
+  throw IoError(
+      paths_[i], "",
+      "cannot write a probe row: " + write_failure(err) +
+          (cut ? "; the file keeps the rows before it" : "; the file may end in a half row"));
 }
 
 std::vector<Index> displacement_probe_nodes(const std::vector<ResolvedProbe>& probes) {
@@ -98,9 +137,7 @@ void ProbeWriter::record_probed(double time, std::int64_t step, const std::vecto
     }
     const auto row =
         fmt::format("{:.17g},{},{:.17g},{:.17g},{:.17g}\n", time, step, v[0], v[1], v[2]);
-    if (std::fputs(row.c_str(), files_[i]) < 0 || std::fflush(files_[i]) != 0) {
-      throw IoError(paths_[i], "", "cannot write a probe row");
-    }
+    append(i, row);
   }
 }
 

@@ -4,7 +4,9 @@
 //   reaction probe:      time,step,fx,fy,fz   (N, Σ of the internal nodal forces over the set: at
 //                                              rest, the force the supports exert on the body)
 // time is scene time (s). Every row is flushed as it is written, so an interrupted run keeps its
-// rows; numbers are printed with 17 significant digits (they read back exactly).
+// rows; numbers are printed with 17 significant digits (they read back exactly). A row that cannot
+// be written (a full disk) is cut off again, so a file never ends in a half row: the IoError says
+// so (a header that cannot be written removes its file).
 #include <array>
 #include <cstdint>
 #include <cstdio>
@@ -67,9 +69,12 @@ class ProbeWriter {
 
  private:
   ProbeWriter() = default;
+  // Writes and flushes `text` to file i, or cuts the file back to sizes_[i] and throws IoError.
+  void append(std::size_t i, const std::string& text);
   std::vector<ResolvedProbe> probes_;
   std::vector<std::string> paths_;
-  std::vector<std::FILE*> files_;
+  std::vector<std::FILE*> files_;    // null once a write failed
+  std::vector<std::int64_t> sizes_;  // bytes of complete lines in each file
 };
 
 }  // namespace sinew::simulator

@@ -1,16 +1,13 @@
 #include "sinew/simulator/output/results_writer.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/formats/hdf5_file.hpp"
 
@@ -45,6 +42,14 @@ struct ResultsWriter::Impl {
   h5::Handle time, step, displacement, von_mises, jacobian, energy_density;
   std::vector<h5::Handle> surfaces;               // positions per visual surface
   std::vector<h5::Handle> surface_displacements;  // displacement per visual surface
+
+  // The datasets first: HDF5 closes a file only with its last open object.
+  void close_datasets() {
+    for (auto* h : {&time, &step, &displacement, &von_mises, &jacobian, &energy_density})
+      h->reset();
+    surfaces.clear();
+    surface_displacements.clear();
+  }
 };
 
 namespace {
@@ -103,6 +108,18 @@ std::vector<std::int32_t> dominant_material(const formats::Model& model) {
 ResultsWriter::ResultsWriter(const std::string& directory, const formats::Model& model,
                              ResultsOptions options)
     : ResultsWriter(Resume{}, directory, model, std::move(options)) {
+  // What an earlier run in this folder left when its writing failed is not these results.
+  std::error_code ec;
+  fs::remove(h5_path_ + ".partial", ec);
+  try {
+    create();
+  } catch (const Error& e) {
+    abandon(e);
+  }
+}
+
+void ResultsWriter::create() {
+  const auto& model = model_;
   auto& f = impl_->file;
   f = h5::create_file(h5_path_);
   const auto& p = h5_path_;
@@ -228,6 +245,30 @@ std::unique_ptr<ResultsWriter> ResultsWriter::resume(const std::string& director
   std::size_t keep = 0;
   while (keep < steps.size() && steps[keep] <= last_step) ++keep;
   w->times_.assign(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(keep));
+  const auto& o = w->options_;
+  for (const auto& [wanted, name] :
+       {std::pair{o.stress, "/frames/von_mises"}, std::pair{o.jacobian, "/frames/J"},
+        std::pair{o.energy_density, "/frames/energy_density"}}) {
+    if (wanted != h5::exists(impl.file, name)) {
+      throw FormatError(
+          p, name,
+          wanted ? "the results to resume lack this field (the scene's output fields changed)"
+                 : "the results to resume have a field the scene no longer asks for");
+    }
+  }
+  // From here on the file is being changed: a failed write moves it away (abandon()). A
+  // FormatError (results that do not fit the scene, above) leaves the user's file as it was.
+  try {
+    w->truncate_to(keep);
+  } catch (const IoError& e) {
+    w->abandon(e);
+  }
+  return w;
+}
+
+void ResultsWriter::truncate_to(std::size_t keep) {
+  const auto& p = h5_path_;
+  auto& impl = *impl_;
   const auto open = [&](const std::string& name) {
     auto ds = h5::open_dataset(impl.file, name, p);
     h5::set_frames(ds, keep, p, name);
@@ -237,52 +278,89 @@ std::unique_ptr<ResultsWriter> ResultsWriter::resume(const std::string& director
   impl.step = open("/frames/step");
   impl.displacement = open("/frames/displacement");
   const auto field = [&](bool wanted, const std::string& name, h5::Handle& h) {
-    if (wanted != h5::exists(impl.file, name)) {
-      throw FormatError(
-          p, name,
-          wanted ? "the results to resume lack this field (the scene's output fields changed)"
-                 : "the results to resume have a field the scene no longer asks for");
-    }
     if (wanted) h = open(name);
   };
-  field(w->options_.stress, "/frames/von_mises", impl.von_mises);
-  field(w->options_.jacobian, "/frames/J", impl.jacobian);
-  field(w->options_.energy_density, "/frames/energy_density", impl.energy_density);
-  for (auto s : w->visual_) {
-    impl.surfaces.push_back(open(surface_group(model.surfaces[s]) + "/positions"));
-    impl.surface_displacements.push_back(open(surface_group(model.surfaces[s]) + "/displacement"));
+  field(options_.stress, "/frames/von_mises", impl.von_mises);
+  field(options_.jacobian, "/frames/J", impl.jacobian);
+  field(options_.energy_density, "/frames/energy_density", impl.energy_density);
+  for (auto s : visual_) {
+    impl.surfaces.push_back(open(surface_group(model_.surfaces[s]) + "/positions"));
+    impl.surface_displacements.push_back(open(surface_group(model_.surfaces[s]) + "/displacement"));
   }
   h5::flush(impl.file, p);
-  w->write_index();
-  return w;
+  write_index();
 }
 
 ResultsWriter::~ResultsWriter() = default;
 
+void ResultsWriter::close() {
+  if (closed_) return;
+  try {
+    impl_->close_datasets();
+    h5::close_file(impl_->file, h5_path_);
+  } catch (const Error& e) {
+    abandon(e);
+  }
+  closed_ = true;
+}
+
+void ResultsWriter::abandon(const Error& e) {
+  closed_ = true;
+  impl_->close_datasets();
+  impl_->file.reset();  // a close that fails too is part of the failure being reported
+  std::error_code ec;
+  std::string where;
+  const auto partial = h5_path_ + ".partial";
+  const auto frames = times_.size();
+  if (frames > 0 && (fs::rename(h5_path_, partial, ec), !ec)) {
+    where = fmt::format(
+        "the results so far ({} complete frame{}) were moved to {}, which may not open (HDF5 had "
+        "not finished writing it)",
+        frames, frames == 1 ? "" : "s", partial);
+  } else {
+    fs::remove(h5_path_, ec);
+    where = fmt::format("{} was removed{}", h5_path_,
+                        frames == 0 ? " (it held no complete frame)" : "");
+  }
+  for (const auto& doc : xdmf_documents()) fs::remove(doc.first, ec);
+  throw IoError(e.file(), e.field(),
+                e.problem() + "; " + where + ", and the XDMF indexes naming it were removed");
+}
+
 void ResultsWriter::append_frame(double time, std::int64_t step, const std::vector<double>& u,
                                  const ElementFields& fields) {
   const auto& p = h5_path_;
-  const auto f = static_cast<hsize_t>(times_.size());
   const auto n = model_.node_count();
   const auto e = model_.element_count();
+  if (closed_) throw IoError(p, "", "the results file is closed: no more frames");
   if (u.size() != 3 * n)
     throw IoError(p, "/frames/displacement",
                   fmt::format("expected {} values, got {}", 3 * n, u.size()));
-  const auto check = [&](const std::vector<double>& v, const char* name) {
-    if (v.size() != e)
+  const auto check = [&](bool on, const std::vector<double>& v, const char* name) {
+    if (on && v.size() != e)
       throw IoError(p, name, fmt::format("expected {} element values, got {}", e, v.size()));
-    return v.data();
   };
+  check(options_.stress, fields.von_mises, "/frames/von_mises");
+  check(options_.jacobian, fields.jacobian, "/frames/J");
+  check(options_.energy_density, fields.energy_density, "/frames/energy_density");
+  try {
+    write_frame(time, step, u, fields);
+  } catch (const Error& err) {
+    abandon(err);
+  }
+}
+
+void ResultsWriter::write_frame(double time, std::int64_t step, const std::vector<double>& u,
+                                const ElementFields& fields) {
+  const auto& p = h5_path_;
+  const auto f = static_cast<hsize_t>(times_.size());
   auto& impl = *impl_;
   h5::append(impl.displacement, f, u.data(), p, "/frames/displacement");
   if (options_.stress)
-    h5::append(impl.von_mises, f, check(fields.von_mises, "/frames/von_mises"), p,
-               "/frames/von_mises");
-  if (options_.jacobian)
-    h5::append(impl.jacobian, f, check(fields.jacobian, "/frames/J"), p, "/frames/J");
+    h5::append(impl.von_mises, f, fields.von_mises.data(), p, "/frames/von_mises");
+  if (options_.jacobian) h5::append(impl.jacobian, f, fields.jacobian.data(), p, "/frames/J");
   if (options_.energy_density) {
-    h5::append(impl.energy_density, f, check(fields.energy_density, "/frames/energy_density"), p,
-               "/frames/energy_density");
+    h5::append(impl.energy_density, f, fields.energy_density.data(), p, "/frames/energy_density");
   }
   for (std::size_t i = 0; i < visual_.size(); ++i) {
     const auto& surf = model_.surfaces[visual_[i]];
@@ -446,24 +524,7 @@ std::string ResultsWriter::xdmf_text() const {
 }
 
 void ResultsWriter::write_index() const {
-  for (const auto& [path, text] : xdmf_documents()) {
-    const auto tmp = path + ".tmp-" + std::to_string(::getpid());
-    {
-      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-      if (!out) throw IoError(tmp, "", "cannot create the XDMF index");
-      out << text;
-      out.flush();
-      if (!out) {
-        out.close();
-        std::remove(tmp.c_str());
-        throw IoError(tmp, "", "cannot write the XDMF index");
-      }
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-      std::remove(tmp.c_str());
-      throw IoError(path, "", "cannot rename the XDMF index into place");
-    }
-  }
+  for (const auto& [path, text] : xdmf_documents()) write_text_atomically(path, text);
 }
 
 }  // namespace sinew::simulator

@@ -24,6 +24,10 @@
 // Frame datasets are extendible along their first axis. After each frame the file is flushed
 // (H5Fflush) and the XDMF files rewritten atomically (temporary file + rename), so a run killed
 // between frames leaves a file and indexes that agree on every frame written.
+// A write that fails (a full disk: HDF5 may have written part of its metadata, and the file then
+// fails to open with "addr overflow") never leaves results.h5 under its name: the writer closes it
+// and renames it to results.h5.partial (removes it when no frame was complete), removes the XDMF
+// indexes that name it, and throws an IoError that says so (abandon()).
 //
 // Surface vertices follow the volume through their embedding: x = X + Σa Na(ξ, η, ζ) ua with the
 // trilinear hex8 shape functions Na = (1+ξaξ)(1+ηaη)(1+ζaζ)/8 (physics-notes §1) at the stored
@@ -34,6 +38,7 @@
 #include <utility>
 #include <vector>
 
+#include "sinew/common/error.hpp"
 #include "sinew/formats/model.hpp"
 #include "sinew/formats/results_format.hpp"
 #include "sinew/simulator/engine/backend.hpp"
@@ -75,6 +80,9 @@ class ResultsWriter {
   // Flushes the file and rewrites the index.
   void append_frame(double time, std::int64_t step, const std::vector<double>& u,
                     const ElementFields& fields);
+  // Closes results.h5 now, so that a failure of its last write (HDF5 writes metadata on close) is
+  // an error rather than a damaged file; then no more frames. The destructor closes it otherwise.
+  void close();
 
   std::int64_t frame_count() const { return static_cast<std::int64_t>(times_.size()); }
   const std::vector<double>& times() const { return times_; }
@@ -91,7 +99,14 @@ class ResultsWriter {
   struct Resume {};
   ResultsWriter(Resume, const std::string& directory, const formats::Model& model,
                 ResultsOptions options);
+  void create();                         // the new file: mesh, empty series, index
+  void truncate_to(std::size_t frames);  // resume: keep `frames` frames, reopen the series
+  void write_frame(double time, std::int64_t step, const std::vector<double>& u,
+                   const ElementFields& fields);  // append_frame's writes
   void write_index() const;
+  // After a failed write (`e`): closes the file, moves results.h5 out of its name, removes the
+  // indexes and throws e as an IoError that says where the results went.
+  [[noreturn]] void abandon(const Error& e);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;
@@ -100,6 +115,7 @@ class ResultsWriter {
   std::string h5_path_, xdmf_path_;
   std::vector<double> times_;
   std::vector<std::size_t> visual_;  // indices of the model's visual surfaces
+  bool closed_ = false;              // by close() or abandon(): no more frames
 };
 
 }  // namespace sinew::simulator

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -143,6 +144,14 @@ RunResult run_scene(const RunOptions& options) {
           "the checkpoint was written by another scene, model or precision (the scene file, the "
           "model file and the precision must be exactly those of the interrupted run)");
     }
+    // A step past the plan "completed" at once with a time far beyond the scene's (a step of 1e15
+    // gave 1.24e10 s simulated: issue 33); the engine checks time against step · Δt.
+    if (ckpt.state.step > plan.steps) {
+      throw ConfigError(options.restart, "step",
+                        fmt::format("step {} is past the {} steps this run plans (duration / Δt): "
+                                    "not a checkpoint of this run",
+                                    ckpt.state.step, plan.steps));
+    }
     try {
       backend->restore(ckpt.state);
     } catch (const ConfigError& e) {
@@ -246,6 +255,21 @@ RunResult run_scene(const RunOptions& options) {
     summary.loop_stages = clock.stages(loop_s);
     summary.loop_end_unix_s = unix_seconds();
   };
+  // After a failure `reported`: every frame queued so far into the file (an unstable run keeps its
+  // frames), then the file closed, each in its own try; a failure of either that is not the one
+  // being reported is logged (a results file that cannot be finished is moved out of its name,
+  // results_writer.hpp, and the message says where).
+  const auto wind_down = [&](const Error& reported) {
+    const auto attempt = [&](auto&& f) {
+      try {
+        f();
+      } catch (const Error& failure) {
+        if (std::string_view(failure.what()) != reported.what()) log::warn("{}", failure.what());
+      }
+    };
+    attempt([&] { frame_writer.finish(); });
+    attempt([&] { results->close(); });
+  };
   try {
     while (backend->step_index() < total) {
       const std::int64_t n = backend->step_index();
@@ -272,6 +296,7 @@ RunResult run_scene(const RunOptions& options) {
       const bool stop = options.stop_at_step >= 0 && now >= options.stop_at_step && now < total;
       if ((g_interrupt.load() != 0 || stop) && now < total) {
         write_ckpt();
+        results->close();  // a failure of its last write is this run's error, not a bad file
         finish_loop();
         summary.status = "interrupted";
         summary.message = fmt::format("stopped at step {} (t = {:.6g} s); resume with --restart {}",
@@ -283,31 +308,31 @@ RunResult run_scene(const RunOptions& options) {
         return result;
       }
     }
+    progress.finish();
+    clock.time(StageClock::frames, [&] {
+      frame_writer.finish();
+      results->close();  // a failure of its last write is this run's error, not a bad file
+    });
   } catch (const InstabilityError& e) {
-    try {
-      frame_writer.finish();  // every frame so far in the file
-    } catch (const Error&) {
-      // The instability is the error to report; the summary is written below.
-    }
+    wind_down(e);
     finish_loop();
     summary.status = "unstable";
     summary.message = e.what();
     write_summary();
     throw;
   } catch (const Error& e) {
+    wind_down(e);
     finish_loop();
     summary.status = "failed";
     summary.message = e.what();
     try {
-      frame_writer.finish();
       write_summary();
     } catch (const Error&) {
-      // The original error is the one to report.
+      // The original error is the one to report (run_summary.cpp removes a summary it cannot
+      // rewrite).
     }
     throw;
   }
-  progress.finish();
-  clock.time(StageClock::frames, [&] { frame_writer.finish(); });
   finish_loop();
   summary.status = "completed";
   write_summary();
