@@ -661,7 +661,8 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
 
   if (s.effects.sliding && model.sliding.empty()) {
     throw ConfigError(scene.file, "effects",
-                      "'sliding' is listed but the model has no sliding nodes");
+                      "'sliding' is listed but the model has no sliding nodes (remove it from "
+                      "effects, or give the model's spec a sliding condition: docs/voxelizer.md)");
   }
   if (s.effects.muscles && model.muscles.empty()) {
     throw ConfigError(scene.file, "effects", "'muscles' is listed but the model has no muscles");
