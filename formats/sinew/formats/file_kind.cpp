@@ -26,7 +26,7 @@ std::string file_kind(hid_t file, const std::string& path) {
   const std::string format = format_of(file, path);
   if (format == kModelFormatName) return "a sinew model file";
   if (format == kResultsFormatName) return "a sinew results file";
-  // The checkpoint's name is simulator/checkpoint.hpp's kCheckpointFormatName.
+  // The checkpoint's name is simulator/engine/checkpoint.hpp's kCheckpointFormatName.
   if (format == "sinew-checkpoint") return "a sinew checkpoint";
   if (format.empty()) return "an HDF5 file without a sinew format attribute";
   return fmt::format("an HDF5 file with format '{}'", format);

@@ -1,4 +1,4 @@
-// ModelCache (simulator/model_cache.hpp): each model file read and hashed once, shared across
+// ModelCache (simulator/engine/model_cache.hpp): each model file read and hashed once, shared across
 // threads, errors as the reader's, entries released when no run uses them.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// When frames and probe rows are written (simulator/output_schedule.hpp): event k on the first
+// When frames and probe rows are written (simulator/output/output_schedule.hpp): event k on the first
 // step at or after k · interval, and an interval too long for the int64 step range (1e308 s, as
 // scripts/fuzz_inputs.py wrote into a scene) gives no events after the first instead of a hang.
 #include "sinew/simulator/output/output_schedule.hpp"
