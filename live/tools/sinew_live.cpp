@@ -14,9 +14,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <system_error>
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/threads.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/live/own_origin.hpp"
@@ -27,13 +29,23 @@
 
 int main(int argc, char** argv) {
   using namespace sinew;
+  threads::prefer_passive_wait(argv);
   CLI::App app{
       "sinew-live: simulate a scene and watch and steer it in a browser while it runs "
       "(docs/live.md)"};
   simulator::RunOptions opt;
   live::SessionOptions so;
   live::ServerOptions server;
-  std::string precision, web = SINEW_LIVE_WEB_DIR, three = SINEW_LIVE_THREE_DIR;
+  // The page and three.js beside the tool (the build copies them there: live/copy_page.cmake)
+  // first, so a build used from elsewhere or copied away serves its page; else the source tree.
+  std::error_code ec;
+  const auto here = std::filesystem::read_symlink("/proc/self/exe", ec).parent_path();
+  const auto beside = [&](const char* name, const char* file, const char* source) {
+    return !ec && std::filesystem::is_regular_file(here / name / file) ? (here / name).string()
+                                                                       : std::string(source);
+  };
+  std::string precision, web = beside("web", "index.html", SINEW_LIVE_WEB_DIR),
+                         three = beside("three", "build/three.module.js", SINEW_LIVE_THREE_DIR);
   bool verbose = false;
   auto* scene_opt =
       app.add_option("scene", opt.scene_path, "Scene file (YAML, docs/scene-format.md)")
@@ -47,7 +59,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
   app.add_option("--precision", precision, "Override the scene's precision: float or double")
       ->check(CLI::IsMember({"float", "double"}));
-  app.add_option("--threads", opt.threads, "OpenMP threads of the CPU backend (default: all)")
+  app.add_option("--threads", opt.threads,
+                 "OpenMP threads of the CPU backend (default: every core, waiting passively)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--explain", opt.explain, "Print the plan first (as sinew-simulate --explain)");
   app.add_option("--host", server.host,
@@ -108,8 +121,11 @@ int main(int argc, char** argv) {
       throw IoError(web, "", "the page's folder has no index.html (--web)");
     if (!std::filesystem::is_regular_file(std::filesystem::path(three) / "build/three.module.js"))
       throw IoError(three, "",
-                    "three.js is not installed there: run scripts/install-deps (it puts three.js "
-                    "into .cache/three), or point --three at a three.js package folder");
+                    fmt::format("three.js is not there, nor beside the tool ({}/three): run "
+                                "scripts/install-deps (it puts three.js into .cache/three) and "
+                                "build again (it copies it beside sinew-live), or point --three at "
+                                "a three.js package folder",
+                                here.string()));
     // The live run plans as sinew-simulate does, with its steering (make_live_setup).
     auto run = simulator::load_run(
         opt, so.play.empty() ? live::make_live_setup : live::make_playback_setup);

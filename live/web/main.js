@@ -83,13 +83,20 @@ function buildMesh(buf) {
   mesh = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial(
       { vertexColors: true, roughness: 0.7, side: THREE.DoubleSide }));
   scene.add(mesh);
-  const s = geometry.boundingSphere;
+  frontView();
+}
+
+// The first view faces the model as `sinew-render --view front` does: from +z looking along −z
+// with y up, from −y looking along +y with z up (the three-quarter view it had looked at the
+// forehead from below).
+function frontView() {
+  if (!mesh) return;
+  const s = mesh.geometry.boundingSphere;
   controls.target.copy(s.center);
   camera.near = s.radius / 100;
   camera.far = s.radius * 100;
-  // Three-quarter view from the front: −y with z up, +z with y up.
-  const eye = upAxis === 'y' ? new THREE.Vector3(0.6, 0.5, 1.6) : new THREE.Vector3(0.6, -1.6, 1.0);
-  camera.position.copy(s.center).add(eye.multiplyScalar(s.radius * 1.6));
+  const eye = upAxis === 'y' ? new THREE.Vector3(0, 0, 1) : new THREE.Vector3(0, -1, 0);
+  camera.position.copy(s.center).add(eye.multiplyScalar(s.radius * 3));
   camera.up.set(0, upAxis === 'y' ? 1 : 0, upAxis === 'y' ? 0 : 1);
   camera.updateProjectionMatrix();
   controls.update();
@@ -195,7 +202,7 @@ ws.addEventListener('message', (ev) => {
   const m = JSON.parse(ev.data);
   if (m.type === 'hello') {
     hello = m;
-    if (!params.has('up') && m.up === 'y') upAxis = 'y';
+    if (!params.has('up') && m.up === 'y') { upAxis = 'y'; frontView(); }
     $('title').textContent = m.title || m.scene;
     m.muscles.forEach(muscleRow);
     if (m.playback) {

@@ -17,6 +17,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/threads.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/partition/partition.hpp"
@@ -52,6 +53,7 @@ int simulate(const sinew::simulator::RunOptions& opt) {
 
 int main(int argc, char** argv) {
   using namespace sinew;
+  threads::prefer_passive_wait(argv);
   CLI::App app{"sinew-simulate: TLED simulation of a sinew model as a scene file describes it"};
   simulator::RunOptions opt;
   std::string precision, output;
@@ -74,8 +76,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
   app.add_option("--precision", precision, "Override the scene's precision: float or double")
       ->check(CLI::IsMember({"float", "double"}));
-  app.add_option("--threads", opt.threads,
-                 "OpenMP threads (default: all; results do not depend on it)")
+  app.add_option(
+         "--threads", opt.threads,
+         "OpenMP threads (default: every core, waiting passively; results do not depend on it)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("-q,--quiet", opt.quiet, "No progress bar, warnings and errors only");
   app.add_flag("-v,--verbose", verbose, "Debug messages");

@@ -18,6 +18,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/threads.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/common/version.hpp"
 #include "sinew/simulator/run/runner.hpp"
@@ -48,6 +49,7 @@ int exit_status(const sinew::sweep::SweepReport& report, const std::string& outp
 
 int main(int argc, char** argv) {
   using namespace sinew;
+  threads::prefer_passive_wait(argv);
   CLI::App app{
       "sinew-sweep: runs a sweep file (docs/sweep-format.md): a base scene with values varied "
       "over a grid or a list; one results folder per run and one table of values and figures"};

@@ -89,6 +89,16 @@ try {
   await waitFor('window.sinewLive && window.sinewLive.frames > 5', 'frames');
   check(true, 'the page receives frames');
 
+  // The muscle panel shows whole names: a long one (the face rig's) wraps instead of being cut
+  // ("frontalis_l…" in a fixed 80 px box before issue 34).
+  const nameFits = await live(`(() => { const e = document.querySelector('#muscles .name');
+    const shown = e.textContent === 'flexor';
+    e.textContent = 'frontalis_left_medial_and_lateral_bellies';
+    const fits = e.scrollWidth <= e.clientWidth + 1;
+    e.textContent = 'flexor';
+    return shown && fits; })()`);
+  check(nameFits, 'the muscle panel shows the whole muscle name, long ones wrapped');
+
   // Slider to 1: the free end (largest x) moves towards the clamp.
   const freeEndDx = `(() => { const L = window.sinewLive, r = L.rest(), d = L.displacement;
     let m = 0; for (let i = 0; i < r.length / 3; ++i) if (r[3*i] > 0.0239) m = Math.min(m, d[3*i]); return m; })()`;

@@ -7,12 +7,14 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/threads.hpp"
 #include "sinew/common/tool.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/voxelizer/spec.hpp"
 #include "sinew/voxelizer/voxelize.hpp"
 
 int main(int argc, char** argv) {
+  sinew::threads::prefer_passive_wait(argv);
   CLI::App app{"sinew-voxelize: layered surface meshes -> a voxel finite-element model"};
   std::string spec_path, output;
   bool json = false, quiet = false;

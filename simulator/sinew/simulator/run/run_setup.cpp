@@ -11,6 +11,7 @@
 
 #include "sinew/common/error.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/common/threads.hpp"
 #include "sinew/common/yaml_reader.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/simulator/engine/cpu_engine.hpp"
@@ -173,6 +174,7 @@ std::string explain_run(LoadedRun& run, const RunOptions& options) {
   std::string text = run.backend->plan().explain();
   if (!text.empty() && text.back() != '\n') text += '\n';
   text += fmt::format("Device: {}\n", run.summary.device);
+  if (!run.cuda) text += "  " + threads::explain(run.threads, options.threads > 0) + "\n";
   text += fmt::format("Outputs: {}\n", output_dir.empty() ? "(none)" : output_dir);
   std::string fields;
   for (auto f : resolved.fields) fields += (fields.empty() ? "" : ", ") + std::string(to_string(f));
