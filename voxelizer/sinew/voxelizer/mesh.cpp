@@ -1,12 +1,9 @@
 #include "sinew/voxelizer/mesh.hpp"
 
-#include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -18,6 +15,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/common/input_file.hpp"
 #include "sinew/common/log.hpp"
+#include "sinew/voxelizer/mesh_isolation.hpp"
 
 namespace sinew::voxelizer {
 namespace {
@@ -163,55 +161,6 @@ void measure(const TriangleMesh& m, MeshDiagnostics& d) {
   d.enclosed_volume = volume;
 }
 
-// Appends the triangles of `node` and its children to `out`. missing_uvs counts triangles from
-// assimp meshes without texture coordinates (their corner_uvs are left NaN).
-void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent, TriangleMesh& out,
-             std::int64_t& missing_uvs) {
-  const aiMatrix4x4 world = parent * node->mTransformation;
-  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-  for (unsigned k = 0; k < node->mNumMeshes; ++k) {
-    const aiMesh* mesh = scene->mMeshes[node->mMeshes[k]];
-    if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-    // assimp joins vertices equal in position and texture coordinates; a seam keeps one vertex per
-    // (u, v). Join equal positions here (the texture coordinates go with the triangle corners).
-    // Keyed by the bits, so a NaN coordinate (reported by load_mesh) is never joined to another.
-    std::map<std::array<std::uint32_t, 3>, std::int32_t> first;
-    std::vector<std::int32_t> index(mesh->mNumVertices);
-    for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
-      // Double precision for the node chain: assimp's matrices are float.
-      const aiVector3D& p = mesh->mVertices[i];
-      const std::array<std::uint32_t, 3> bits{std::bit_cast<std::uint32_t>(p.x),
-                                              std::bit_cast<std::uint32_t>(p.y),
-                                              std::bit_cast<std::uint32_t>(p.z)};
-      const auto [at, added] = first.emplace(bits, static_cast<std::int32_t>(out.vertices.size()));
-      index[i] = at->second;
-      if (!added) continue;
-      const aiMatrix4x4& w = world;
-      const double x = p.x, y = p.y, z = p.z;
-      out.vertices.push_back(
-          {double(w.a1) * x + double(w.a2) * y + double(w.a3) * z + double(w.a4),
-           double(w.b1) * x + double(w.b2) * y + double(w.b3) * z + double(w.b4),
-           double(w.c1) * x + double(w.c2) * y + double(w.c3) * z + double(w.c4)});
-    }
-    const aiVector3D* uv = mesh->HasTextureCoords(0) ? mesh->mTextureCoords[0] : nullptr;
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      out.triangles.push_back(
-          {index[face.mIndices[0]], index[face.mIndices[1]], index[face.mIndices[2]]});
-      CornerUvs c;
-      for (int j = 0; j < 3; ++j) {
-        c[j] = uv ? std::array<double, 2>{uv[face.mIndices[j]].x, uv[face.mIndices[j]].y}
-                  : std::array<double, 2>{nan, nan};
-      }
-      if (!uv) ++missing_uvs;
-      out.corner_uvs.push_back(c);
-    }
-  }
-  for (unsigned c = 0; c < node->mNumChildren; ++c)
-    collect(scene, node->mChildren[c], world, out, missing_uvs);
-}
-
 }  // namespace
 
 double metres_per_unit(LengthUnit unit) {
@@ -298,25 +247,14 @@ TriangleMesh load_mesh(const std::filesystem::path& path, const MeshTransform& t
   }
   if (!std::isfinite(t.scale) || t.scale == 0)
     throw GeometryError(file, "scale", "scale must be finite and non-zero");
-  Assimp::Importer importer;
-  // Positions and texture coordinates only: JoinIdenticalVertices then joins corners that differ
-  // in normals only; collect() joins equal positions whatever their texture coordinates.
-  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS,
-                              aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
-                                  aiComponent_COLORS | aiComponent_BONEWEIGHTS |
-                                  aiComponent_ANIMATIONS | aiComponent_TEXTURES |
-                                  aiComponent_LIGHTS | aiComponent_CAMERAS | aiComponent_MATERIALS);
-  const aiScene* scene =
-      importer.ReadFile(file, aiProcess_RemoveComponent | aiProcess_Triangulate |
-                                  aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
-  if (scene == nullptr) {
-    throw FormatError(file, "", std::string("cannot read the mesh: ") + importer.GetErrorString());
-  }
+  // In the helper process (mesh_isolation.hpp): a file that crashes or hangs assimp is an error.
+  ImportedMesh imported = import_mesh_isolated(path);
   TriangleMesh mesh;
   mesh.source = file;
-  std::int64_t missing_uvs = 0;
-  if (scene->mRootNode != nullptr)
-    collect(scene, scene->mRootNode, aiMatrix4x4(), mesh, missing_uvs);
+  mesh.vertices = std::move(imported.vertices);
+  mesh.triangles = std::move(imported.triangles);
+  mesh.corner_uvs = std::move(imported.corner_uvs);
+  const std::int64_t missing_uvs = imported.missing_uvs;
   if (mesh.triangles.empty()) throw GeometryError(file, "", "the file contains no triangles");
   // Texture coordinates are kept only when every triangle has finite ones: a mesh needs none to
   // be voxelized, so damaged ones are dropped with a warning rather than refused.
@@ -339,7 +277,7 @@ TriangleMesh load_mesh(const std::filesystem::path& path, const MeshTransform& t
   }
   apply_transform(t, mesh);
   log::debug("{}: {} vertices, {} triangles loaded ({} meshes)", file, mesh.vertices.size(),
-             mesh.triangles.size(), scene->mNumMeshes);
+             mesh.triangles.size(), imported.parts);
   return mesh;
 }
 

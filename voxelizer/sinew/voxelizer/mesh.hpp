@@ -76,12 +76,15 @@ void apply_transform(const MeshTransform& t, TriangleMesh& mesh);
 // triangulated; point and line primitives are ignored. Vertices with identical positions inside
 // one assimp mesh are joined (formats like STL store each triangle's corners separately); further
 // welding is clean_mesh's job. Texture coordinates (assimp's channel 0) become corner_uvs when
-// every part of the file has them (otherwise none are kept, logged). Then t is applied: the result is in metres. Unit metadata inside
-// a file (COLLADA <unit>, FBX UnitScaleFactor) is applied by assimp as part of the node
-// transforms; t.unit says what the resulting numbers are in.
-// Throws IoError (missing/unreadable file), FormatError (assimp cannot parse it: unknown format or
-// broken file, with assimp's message), GeometryError (no triangles; NaN or infinite coordinates,
-// naming the vertex index).
+// every part of the file has them (otherwise none are kept, logged). Then t is applied: the
+// result is in metres. Unit metadata inside a file (COLLADA <unit>, FBX UnitScaleFactor) is
+// applied by assimp as part of the node transforms; t.unit says what the resulting numbers are in.
+// assimp runs in the helper process sinew-mesh-import (mesh_isolation.hpp), after the checks of
+// mesh_import.hpp (PLY, OFF and STL headers; NaN and infinity in ASCII PLY, OFF and STL).
+// Throws IoError (missing/unreadable file; the helper cannot be started), FormatError (assimp
+// cannot parse it: unknown format or broken file, with assimp's message; a header that does not
+// fit the file; assimp crashed on it or ran past its deadline), GeometryError (no triangles; NaN
+// or infinite coordinates, naming the vertex index or the line).
 TriangleMesh load_mesh(const std::filesystem::path& path, const MeshTransform& t = {});
 
 // Writes mesh with assimp's exporter; the format follows the extension: obj, ply (binary), stl
