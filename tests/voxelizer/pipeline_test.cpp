@@ -18,6 +18,7 @@
 namespace sinew::voxelizer {
 namespace {
 
+using testing::expect_error;
 using testing::run_spec;
 using testing::TempDir;
 
@@ -145,22 +146,6 @@ boundary: [{type: rigid, inside: true}, {type: sliding, within: 0.5}]
   EXPECT_GT(r.summary.sliding_nodes, 0);
 }
 
-// Runs the library on a spec and returns the error type and message.
-template <typename E>
-std::string expect_error(const std::string& yaml, const std::filesystem::path& file,
-                         VoxelizeOptions options = {}) {
-  try {
-    voxelize(parse_spec(yaml, file), options);
-  } catch (const E& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-    return "";
-  }
-  ADD_FAILURE() << "no error";
-  return "";
-}
-
 std::string with_outer(const std::string& outer, const std::string& extra = "") {
   return "units: mm\nresolution: {voxel_size: 1}\nouter: " + outer +
          "\nmaterials: {preset: warburton2013}\nlayers: [{material: dermis}]\n" + extra;
@@ -267,6 +252,26 @@ TEST(Tool, BadInputExitsNonZeroAndWritesNothing) {
   const auto missing = run_tool((dir / "no_such_spec.yaml").string(), dir);
   EXPECT_NE(missing.status, 0);
   EXPECT_NE(missing.output.find("no_such_spec.yaml"), std::string::npos) << missing.output;
+}
+
+// --force reaches the library: a mesh 2.2 m long in a spec in mm is refused, naming the file,
+// the extent and the units, and voxelized with a warning when forced (mesh_bounds_test.cpp).
+TEST(Tool, ForceGoesPastTheBoundsOnTheMeshes) {
+  TempDir dir;
+  testing::write_obj(make_box({0, 0, 0}, {2200, 10, 10}, 0), dir / "long.obj");
+  dir.write("long.yaml",
+            "units: mm\noutput: out.h5\nresolution: {voxel_size: 5}\n"
+            "outer: long.obj\nmaterials: {preset: warburton2013}\n"
+            "layers: [{material: dermis}]\n");
+  const auto refused = run_tool((dir / "long.yaml").string(), dir);
+  EXPECT_EQ(refused.status, 1) << refused.output;
+  EXPECT_NE(refused.output.find("long.obj: outer: the mesh spans 2200 mm"), std::string::npos)
+      << refused.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.h5"));
+  const auto forced = run_tool((dir / "long.yaml").string() + " --force", dir);
+  EXPECT_EQ(forced.status, 0) << forced.output;
+  EXPECT_NE(forced.output.find("going on (--force)"), std::string::npos) << forced.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out.h5"));
 }
 
 }  // namespace

@@ -66,6 +66,23 @@ inline VoxelizeResult run_spec(const std::string& yaml, const std::filesystem::p
   return voxelize(parse_spec(yaml, file), options);
 }
 
+// Runs the library on a spec and returns the message of the error of type E it throws (a test
+// failure when it throws another or none).
+template <typename E>
+std::string expect_error(const std::string& yaml, const std::filesystem::path& file,
+                         VoxelizeOptions options = {}) {
+  try {
+    voxelize(parse_spec(yaml, file), options);
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+    return "";
+  }
+  ADD_FAILURE() << "no error";
+  return "";
+}
+
 inline double material_volume(const Summary& s, const std::string& name) {
   for (const auto& v : s.material_volumes)
     if (v.name == name) return v.volume;

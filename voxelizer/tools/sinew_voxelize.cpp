@@ -1,4 +1,4 @@
-// sinew-voxelize SPEC [-o MODEL] [--json] [--quiet] [--threads N]
+// sinew-voxelize SPEC [-o MODEL] [--json] [--quiet] [--threads N] [--force]
 // Reads a voxelizer spec (docs/voxelizer.md), builds the model and writes the model file; prints a
 // summary (or, with --json, the same as JSON on stdout). Any error: a message on stderr, exit
 // code 1 (2 for command-line errors), and no model file.
@@ -17,13 +17,16 @@ int main(int argc, char** argv) {
   sinew::threads::prefer_passive_wait(argv);
   CLI::App app{"sinew-voxelize: layered surface meshes -> a voxel finite-element model"};
   std::string spec_path, output;
-  bool json = false, quiet = false;
+  bool json = false, quiet = false, force = false;
   int threads = 0;
   app.add_option("spec", spec_path, "the voxelizer spec (YAML)")->required();
   app.add_option("-o,--output", output, "model file to write (default: the spec's output)");
   app.add_flag("--json", json, "print the summary as JSON on stdout");
   app.add_flag("-q,--quiet", quiet, "no progress bar, no log messages below errors");
   app.add_option("--threads", threads, "OpenMP threads (default: all)")->check(CLI::PositiveNumber);
+  app.add_flag("--force", force,
+               "go past the bounds on the meshes (extent against the units, element count, "
+               "negative volume) with a warning each");
   CLI11_PARSE(app, argc, argv);
 
   sinew::log::set_level(quiet ? sinew::log::Level::error : sinew::log::Level::info);
@@ -37,6 +40,7 @@ int main(int argc, char** argv) {
     sinew::voxelizer::VoxelizeOptions options;
     options.threads = threads;
     options.progress = !quiet && !json;
+    options.force = force;
     auto result = sinew::voxelizer::voxelize(spec, options);
     sinew::formats::write_model(result.model, spec.output.string());
     result.summary.output = spec.output.string();

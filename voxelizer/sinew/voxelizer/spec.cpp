@@ -303,7 +303,8 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   {
     const auto n = root.child("resolution");
     if (!n.defined()) throw n.error("missing (give voxel_size or target_elements)");
-    n.allow_keys({"voxel_size", "target_elements", "max_subdivision", "min_fraction"});
+    n.allow_keys(
+        {"voxel_size", "target_elements", "max_subdivision", "min_fraction", "max_elements"});
     if (n.has("voxel_size")) spec.voxel_size = r.length(n.child("voxel_size"));
     if (n.has("target_elements")) {
       spec.target_elements = n.child("target_elements").integer();
@@ -311,6 +312,10 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
     }
     if (spec.voxel_size.has_value() == spec.target_elements.has_value()) {
       throw n.error("give exactly one of voxel_size and target_elements");
+    }
+    if (n.has("max_elements")) {
+      spec.max_elements = n.child("max_elements").integer();
+      if (*spec.max_elements < 1) throw n.child("max_elements").error("must be >= 1");
     }
     if (n.has("max_subdivision")) {
       const auto l = n.child("max_subdivision").integer();
@@ -601,6 +606,7 @@ std::string spec_to_json(const Spec& spec) {
   j["units_in_spec"] = to_string(spec.units);
   if (spec.voxel_size) j["voxel_size"] = *spec.voxel_size;
   if (spec.target_elements) j["target_elements"] = *spec.target_elements;
+  if (spec.max_elements) j["max_elements"] = *spec.max_elements;
   j["max_subdivision"] = spec.max_subdivision;
   j["min_fraction"] = spec.min_fraction;
   j["weld_tolerance"] = spec.weld_tolerance;

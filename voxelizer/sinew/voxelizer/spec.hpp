@@ -150,7 +150,10 @@ struct Spec {
   // Resolution: exactly one of voxel_size (m) and target_elements.
   std::optional<double> voxel_size;
   std::optional<std::int64_t> target_elements;
-  int max_subdivision = 1;      // levels of adaptive subdivision of a boundary voxel
+  int max_subdivision = 1;  // levels of adaptive subdivision of a boundary voxel
+  // The most elements the meshes may make (expected from their volume and area, checked before the
+  // fractions are computed); empty: kDefaultMaxElements (mesh_bounds.hpp). --force goes past it.
+  std::optional<std::int64_t> max_elements;
   double min_fraction = 0.0;    // voxels whose tissue fraction is ≤ this are dropped
   double weld_tolerance = 0.0;  // m, for clean_mesh
 

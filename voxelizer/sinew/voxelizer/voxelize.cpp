@@ -25,6 +25,7 @@
 #include "sinew/voxelizer/embedding.hpp"
 #include "sinew/voxelizer/fibres.hpp"
 #include "sinew/voxelizer/fractions.hpp"
+#include "sinew/voxelizer/mesh_bounds.hpp"
 #include "sinew/voxelizer/mesh_source.hpp"
 #include "sinew/voxelizer/offset.hpp"
 #include "sinew/voxelizer/primitives.hpp"
@@ -156,10 +157,22 @@ class Pipeline {
     result_.summary.warnings.push_back(w);
   }
 
-  LoadedMesh load(const MeshSource& src, const std::string& role) {
+  // A bound of mesh_bounds.hpp: an error naming the mesh, or with --force a warning.
+  void bound(const std::string& file, const std::string& field, const std::string& what,
+             const std::optional<std::string>& problem) {
+    if (!problem) return;
+    if (!options_.force) throw GeometryError(file, field, *problem);
+    warn(what + ": " + *problem + "; going on (--force)");
+  }
+
+  // body: the mesh bounds tissue (outer, inner, muscles, tendons, regions), so it must enclose a
+  // positive volume; selector and visual surfaces may be open sheets.
+  LoadedMesh load(const MeshSource& src, const std::string& role, bool body = true) {
     LoadedMesh lm;
     lm.mesh = load_mesh_source(src);
     if (src.kind == MeshSource::Kind::file) input_files_.push_back(src.path.string());
+    const std::string what = role + " (" + src.describe() + ")";
+    bound(src.describe(), src.field, what, extent_problem(lm.mesh, spec_.units));
     for (std::size_t v = 0; v < lm.mesh.vertices.size(); ++v) {
       const auto& p = lm.mesh.vertices[v];
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
@@ -183,6 +196,7 @@ class Pipeline {
       lm.diagnostics.enclosed_volume = -lm.diagnostics.enclosed_volume;
       warn(role + " (" + src.describe() + "): oriented inward; triangles flipped");
     }
+    if (body) bound(src.describe(), src.field, what, volume_problem(lm.diagnostics, spec_.units));
     result_.summary.meshes.push_back({role, src.describe(), lm.diagnostics});
     const auto& d = lm.diagnostics;
     if (!d.closed) {
@@ -217,7 +231,7 @@ class Pipeline {
       }
     }
     auto extra = [&](const SurfaceRef& r) {
-      if (r.mesh && !extra_.count(r.field)) extra_.emplace(r.field, load(*r.mesh, r.field));
+      if (r.mesh && !extra_.count(r.field)) extra_.emplace(r.field, load(*r.mesh, r.field, false));
     };
     for (const auto& m : spec_.muscles) {
       if (m.fibres.origin.surface) extra(*m.fibres.origin.surface);
@@ -232,16 +246,19 @@ class Pipeline {
 
   double volume_of(const LoadedMesh& m) const { return std::abs(m.diagnostics.enclosed_volume); }
 
+  // Outer minus inner enclosed volume, at most skin area × tissue_thickness (m³).
+  double tissue_volume_estimate() const {
+    double v = volume_of(outer_) - (inner_ ? volume_of(*inner_) : 0.0);
+    if (spec_.tissue_thickness) v = std::min(v, outer_.diagnostics.area * *spec_.tissue_thickness);
+    return v;
+  }
+
   void choose_resolution() {
     auto& s = result_.summary;
     if (spec_.voxel_size) {
       h_ = *spec_.voxel_size;
     } else {
-      double v = volume_of(outer_);
-      if (inner_) v -= volume_of(*inner_);
-      if (spec_.tissue_thickness) {
-        v = std::min(v, outer_.diagnostics.area * *spec_.tissue_thickness);
-      }
+      const double v = tissue_volume_estimate();
       if (!(v > 0)) {
         throw GeometryError(
             spec_.file.string(), "resolution.target_elements",
@@ -392,6 +409,13 @@ class Pipeline {
                               " m) exceeds the available memory " + format_bytes(available) +
                               "; choose a larger voxel size or fewer target elements");
     }
+    // After the memory check, whose message says more about an absurd count; of the tissue, not
+    // the whole inside of the skin (a face's 8 mm of tissue on a bust is a fifth of it).
+    const double expected =
+        std::min(nvox, std::max(tissue_volume_estimate(), 0.0) / (h_ * h_ * h_) + shell);
+    bound(spec_.file.string(), "resolution", "resolution",
+          element_count_problem(expected, spec_.max_elements.value_or(kDefaultMaxElements), h_,
+                                spec_.units));
     s.dims = dims_;
   }
 

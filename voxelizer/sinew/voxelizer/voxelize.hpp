@@ -28,6 +28,9 @@ struct VoxelizeOptions {
   bool progress = false;  // draw a progress bar on long stages
   // Memory the run may use (bytes); empty = MemAvailable from /proc/meminfo.
   std::optional<double> memory_limit_bytes;
+  // Go past the bounds of mesh_bounds.hpp (extent against the spec's units, element count,
+  // negative enclosed volume) with a warning each instead of an error (sinew-voxelize --force).
+  bool force = false;
 };
 
 struct StageReport {
