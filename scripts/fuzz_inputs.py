@@ -7,7 +7,9 @@ broken variants of them (YAML: keys removed, renamed, retyped, numbers replaced 
 1e308, huge lists, wrong nesting, truncated text, binary garbage, UTF-8 oddities, alias bombs, deep
 nesting, an empty file, a directory; HDF5: datasets deleted, resized, retyped, replaced by groups,
 out-of-range and negative indices, NaN coordinates, attributes changed, truncated and bit-flipped
-files), runs each tool on each variant under a timeout, and classifies every run:
+files; meshes for sinew-voxelize, scripts/fuzz_meshes.py: PLY (ASCII and binary), OFF, glTF and
+STL with broken headers, counts, numbers, faces, accessors and bytes, and a 2 GB file of zeros
+named .ply), runs each tool on each variant under a timeout, and classifies every run:
 
   error    nonzero exit with a one-line message that names the input file (the standard)
   vague    nonzero exit whose message does not name the file (reported, not a failure)
@@ -24,6 +26,7 @@ reproducible: `--seed 1 --variants 40` gives the same files on every machine.
 
   scripts/fuzz_inputs.py --build build/dev --work /tmp/sinew-fuzz --variants 40
   scripts/fuzz_inputs.py --build build/dev --targets inspect,export_glb --variants 200 --keep
+  scripts/fuzz_inputs.py --build build/dev --targets voxelize_mesh --mesh-variants 500
 """
 import argparse
 import collections
@@ -38,6 +41,8 @@ import signal
 import subprocess
 import sys
 import time
+
+import fuzz_meshes  # scripts/fuzz_meshes.py: the mesh seeds and mutations
 
 try:
     import h5py
@@ -98,6 +103,16 @@ run: {device: cpu}
 """
 
 
+# The voxelize_mesh target's spec: the mesh (an icosphere of radius 10 mm) as the skin, coarse voxels
+# so that a mesh that still reads runs in a fraction of a second.
+MESH_SPEC = """units: mm
+resolution: {{voxel_size: 4}}
+outer: {mesh}
+materials: {{preset: warburton2013}}
+layers: [{{material: dermis}}]
+"""
+
+
 def tool(build, folder, name):
     path = os.path.join(build, folder, name)
     if not os.path.exists(path):
@@ -111,8 +126,19 @@ def check_call(argv, cwd):
         sys.exit(f"fuzz_inputs: seed step failed: {' '.join(argv)}\n{r.stdout}")
 
 
-def make_seeds(build, seed_dir, with_voxelizer):
+def write_mesh_seeds(seed_dir):
+    """One mesh of each format (fuzz_meshes.py), voxelized by MESH_SPEC."""
+    os.makedirs(os.path.join(seed_dir, "meshes"), exist_ok=True)
+    for name, (ext, data) in fuzz_meshes.seeds().items():
+        with open(os.path.join(seed_dir, "meshes", name + ext), "wb") as f:
+            f.write(data)
+
+
+def make_seeds(build, seed_dir, with_voxelizer, meshes_only=False):
     os.makedirs(seed_dir, exist_ok=True)
+    if meshes_only:  # the voxelize_mesh target alone needs only sinew-voxelize
+        write_mesh_seeds(seed_dir)
+        return
     check_call([tool(build, "formats", "sinew-generate"), "box", "--dims", "3", "3", "3",
                 "--voxel-size", "0.005", "--material", "soft:3000:0.45:1000", "-o", "box.h5"],
                seed_dir)
@@ -150,6 +176,7 @@ def make_seeds(build, seed_dir, with_voxelizer):
             spec = f.read().replace("voxel_size: 1.0", "voxel_size: 2.0")
         with open(os.path.join(seed_dir, "vox_spec.yaml"), "w") as f:
             f.write(spec)
+        write_mesh_seeds(seed_dir)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -554,10 +581,33 @@ def make_yaml_variant(rng, seed_path, out_path):
     return "copy"
 
 
+def make_mesh_variant(rng, seed_dir, i, run_dir, special):
+    """The voxelize_mesh target's input: the i-th format's seed mutated (or a special input named
+    like a PLY), and the spec that reads it. Returns (variant file name, label)."""
+    names = sorted(fuzz_meshes.FORMATS)
+    fmt = names[i % len(names)]
+    ext = fuzz_meshes.FORMATS[fmt][0]
+    variant = "mesh.ply" if special else "mesh" + ext
+    with open(os.path.join(run_dir, "mesh_spec.yaml"), "w") as f:
+        f.write(MESH_SPEC.format(mesh=variant))
+    path = os.path.join(run_dir, variant)
+    if special:
+        return variant, make_special_variant(special, path)
+    with open(os.path.join(seed_dir, "meshes", fmt + ext), "rb") as f:
+        data, label = fuzz_meshes.mutate(rng, f.read(), fmt)
+    with open(path, "wb") as f:
+        f.write(data)
+    return variant, f"{fmt} {label}"
+
+
 def make_special_variant(kind, out_path):
     """An input that is not a file: a folder, a missing file, a FIFO nobody writes (a reader that
-    blocks on it hangs), a character device."""
-    if kind == "directory":
+    blocks on it hangs), a character device; for meshes also a 2 GiB file of zeros (sparse: it
+    costs no disk; assimp 5.2 died of SIGBUS on one named .ply)."""
+    if kind == "zeros_2g":
+        with open(out_path, "wb") as f:
+            f.truncate(2 << 30)
+    elif kind == "directory":
         os.makedirs(out_path)
     elif kind == "missing":
         pass
@@ -569,6 +619,7 @@ def make_special_variant(kind, out_path):
 
 
 SPECIALS = ["directory", "missing", "fifo", "dev_zero"]
+MESH_SPECIALS = SPECIALS + ["zeros_2g"]
 
 # ----------------------------------------------------------------------------------------------
 # Targets: a tool, the seed it mutates, where the variant goes and the command line.
@@ -653,6 +704,10 @@ def targets(build, with_voxelizer, live_three):
         T.append(Target("voxelize", "yaml", "vox_spec.yaml", "vox_spec.yaml",
                         lambda b: [tool(b, "voxelizer", "sinew-voxelize"), "vox_spec.yaml", "-o",
                                    "out.h5", "-q", "--threads", "1"], ["out.h5"]))
+        # The variant is a mesh of one of fuzz_meshes.FORMATS (named per run, make_mesh_variant).
+        T.append(Target("voxelize_mesh", "mesh", None, None,
+                        lambda b: [tool(b, "voxelizer", "sinew-voxelize"), "mesh_spec.yaml", "-o",
+                                   "out.h5", "-q", "--threads", "1"], ["out.h5"]))
     return T
 
 
@@ -685,8 +740,11 @@ def memory_cap(gib):
 def run_one(target, build, run_dir, variant_file, timeout, memory_gib, label=""):
     argv = target.argv(build)
     start = time.time()
+    # The voxelizer's mesh import stops well before the run's timeout: a mesh assimp hangs on
+    # must be a clean error, not a hang of the tool (docs/voxelizer.md, "Broken mesh files").
+    env = dict(os.environ, SINEW_MESH_IMPORT_TIMEOUT=str(max(1.0, timeout / 4)))
     proc = subprocess.Popen(argv, cwd=run_dir, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True, preexec_fn=memory_cap(memory_gib))
+                            start_new_session=True, preexec_fn=memory_cap(memory_gib), env=env)
     out = b""
     hung = False
     if target.live:
@@ -758,6 +816,9 @@ def main():
     ap.add_argument("--work", default="/tmp/sinew-fuzz", help="scratch folder (emptied first)")
     ap.add_argument("--seed", type=int, default=1, help="random seed of the mutations")
     ap.add_argument("--variants", type=int, default=40, help="variants per target")
+    ap.add_argument("--mesh-variants", type=int, default=None,
+                    help="variants of the voxelize_mesh target (default 3 x --variants: six "
+                         "formats share it)")
     ap.add_argument("--timeout", type=float, default=20, help="seconds before a run is a hang")
     ap.add_argument("--memory", type=float, default=4,
                     help="GiB of data segment per tool run (RLIMIT_DATA; 0: none, for ASan)")
@@ -777,9 +838,9 @@ def main():
     work = os.path.abspath(args.work)
     shutil.rmtree(work, ignore_errors=True)
     seed_dir = os.path.join(work, "seed")
-    make_seeds(build, seed_dir, with_vox)
-
     chosen = set(filter(None, args.targets.split(",")))
+    make_seeds(build, seed_dir, with_vox, meshes_only=with_vox and chosen == {"voxelize_mesh"})
+
     all_targets = targets(build, with_vox, args.three)
     if chosen - {t.name for t in all_targets}:
         sys.exit(f"fuzz_inputs: unknown targets {sorted(chosen - {t.name for t in all_targets})}")
@@ -790,7 +851,11 @@ def main():
             continue
         rng = random.Random(f"{args.seed}:{target.name}")
         counts[target.name] = collections.Counter()
-        kinds = ([] if args.no_specials else SPECIALS) + [None] * args.variants
+        mesh = target.kind == "mesh"
+        n = args.variants
+        if mesh:
+            n = 3 * args.variants if args.mesh_variants is None else args.mesh_variants
+        kinds = ([] if args.no_specials else MESH_SPECIALS if mesh else SPECIALS) + [None] * n
         for i, special in enumerate(kinds):
             run_dir = os.path.join(work, target.name, f"{i:04d}")
             os.makedirs(run_dir)
@@ -798,15 +863,19 @@ def main():
                 src = os.path.join(seed_dir, e)
                 dst = os.path.join(run_dir, e)
                 (shutil.copytree if os.path.isdir(src) else shutil.copy)(src, dst)
-            variant = os.path.join(run_dir, target.variant_name)
-            seed_path = os.path.join(seed_dir, target.seed)
-            if special:
-                label = make_special_variant(special, variant)
-            elif target.kind == "h5":
-                label = make_h5_variant(rng, seed_path, variant, target.state_flips)
+            variant_name = target.variant_name
+            if mesh:
+                variant_name, label = make_mesh_variant(rng, seed_dir, i, run_dir, special)
             else:
-                label = make_yaml_variant(rng, seed_path, variant)
-            cls, rc, elapsed, text = run_one(target, build, run_dir, target.variant_name,
+                variant = os.path.join(run_dir, variant_name)
+                seed_path = os.path.join(seed_dir, target.seed)
+                if special:
+                    label = make_special_variant(special, variant)
+                elif target.kind == "h5":
+                    label = make_h5_variant(rng, seed_path, variant, target.state_flips)
+                else:
+                    label = make_yaml_variant(rng, seed_path, variant)
+            cls, rc, elapsed, text = run_one(target, build, run_dir, variant_name,
                                              args.timeout, args.memory, label)
             counts[target.name][cls] += 1
             last = [l for l in text.strip().splitlines() if l.strip()][-1:] or [""]
