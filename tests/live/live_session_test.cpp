@@ -4,6 +4,7 @@
 // a device (and a backend without force slots steers the muscle only).
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -456,9 +457,19 @@ class FailingEngine : public simulator::Backend {
   void step(std::int64_t n) override {
     const std::int64_t left = fail_at_ - e_->step_index();
     if (left > 0) e_->step(std::min(n, left));
-    if (e_->step_index() >= fail_at_) throw std::runtime_error("device lost (test)");
+    if (e_->step_index() >= fail_at_) {
+      failed_ = true;
+      throw std::runtime_error("device lost (test)");
+    }
   }
-  std::int64_t step_index() const override { return e_->step_index(); }
+  // The first question after the failure takes 300 ms to answer (a device slow to report): the
+  // session must publish the step it stopped at before its error message, or a reader of both
+  // sees the step before the failed chunk (issue 34, item 9: this makes that race certain).
+  std::int64_t step_index() const override {
+    if (failed_ && !slow_answer_given_.exchange(true))
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    return e_->step_index();
+  }
   double time() const override { return e_->time(); }
   double dt() const override { return e_->dt(); }
   simulator::State state() const override { return e_->state(); }
@@ -491,6 +502,8 @@ class FailingEngine : public simulator::Backend {
  private:
   std::unique_ptr<simulator::Backend> e_;
   std::int64_t fail_at_;
+  std::atomic<bool> failed_{false};
+  mutable std::atomic<bool> slow_answer_given_{false};
 };
 
 // An engine failure that is not an instability (a device error, memory) used to end sinew-live

@@ -530,6 +530,11 @@ void Session::publish_status() {
 void Session::stop_with_error(const std::string& message) {
   paused_ = true;
   pending_steps_ = 0;
+  // The step it stopped at is published before the message: a reader that sees the error (the
+  // page's status, last_error()) then reads that step, not the one before the failed chunk, which
+  // step_ still held until the loop updated it after the catch (issue 34, item 9: a test reading
+  // step_index() right after last_error() failed once in ten loaded runs).
+  step_ = run_.backend->step_index();
   {
     std::lock_guard lock(mutex_);
     error_ = message;
