@@ -101,6 +101,35 @@ TEST(YamlReader, ErrorsNameFileKeyAndLine) {
   EXPECT_STREQ(absent.what(), "doc.yaml: missing: expected a number");
 }
 
+// Issue 33: yaml-cpp converts a quoted '0.001' as it does 0.001, and YAML::Load reads the first of
+// several documents and drops the rest; both passed without a word.
+TEST(YamlReader, AQuotedNumberIsRefusedAndTheTextStaysText) {
+  const YamlNode root =
+      parse_yaml("dt: '0.001'\nsteps: \"3\"\nflag: 'true'\nname: '0.5'\n", "q.yaml");
+  EXPECT_STREQ(config_error([&] { root.child("dt").number(); }).what(),
+               "q.yaml: dt: expected a number, got the quoted string '0.001' (write it without "
+               "quotes) (line 1)");
+  EXPECT_NE(std::string(config_error([&] { root.child("steps").integer(); }).what())
+                .find("got the quoted string '3'"),
+            std::string::npos);
+  EXPECT_NE(std::string(config_error([&] { root.child("flag").boolean(); }).what())
+                .find("got the quoted string 'true'"),
+            std::string::npos);
+  EXPECT_EQ(root.child("name").text(), "0.5");
+  // Unquoted, the same values are numbers.
+  EXPECT_DOUBLE_EQ(parse_yaml("dt: 0.001\n", "u.yaml").child("dt").number(), 0.001);
+}
+
+TEST(YamlReader, ASecondDocumentIsRefused) {
+  const auto e = config_error([] { parse_yaml("a: 1\n---\nb: 2\n", "two.yaml"); });
+  EXPECT_STREQ(e.what(),
+               "two.yaml: the file holds 2 YAML documents (the second from line 3); give "
+               "one document");
+  // One document, with or without its `---`, and an empty file, are read as before.
+  EXPECT_DOUBLE_EQ(parse_yaml("---\na: 1\n", "one.yaml").child("a").number(), 1.0);
+  EXPECT_FALSE(parse_yaml("", "empty.yaml").has("a"));
+}
+
 // yaml-cpp passes any byte on; a sweep title with invalid UTF-8 then made sinew-sweep end in an
 // untyped "[json.exception.type_error.316] invalid UTF-8 byte" naming no file (fuzz_inputs.py).
 TEST(YamlReader, TextThatIsNotUtf8IsRejectedWithItsLine) {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -185,6 +186,11 @@ namespace {
 template <typename T>
 T convert(const YAML::Node& n, const YamlNode& at, const char* what) {
   if (!n.IsScalar()) throw at.error(fmt::format("expected {}", what));
+  // yaml-cpp converts '0.001' as it does 0.001; a quoted scalar (tag "!") is a string in YAML, and
+  // taking it for a number would hide a value the author meant as text (issue 33).
+  if (n.Tag() == "!")
+    throw at.error(fmt::format("expected {}, got the quoted string '{}' (write it without quotes)",
+                               what, n.Scalar()));
   try {
     return n.as<T>();
   } catch (const YAML::Exception&) {
@@ -330,14 +336,24 @@ std::string YamlNode::replaced(const std::vector<YamlReplacement>& replacements)
 
 YamlNode parse_yaml(const std::string& text, const std::string& file) {
   check_utf8(text, file);
-  YAML::Node root;
+  std::vector<YAML::Node> documents;
   try {
-    root = YAML::Load(text);
+    documents = YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
     throw ConfigError(file, "",
                       fmt::format("YAML syntax error (not valid YAML): {} (line {}, column {})",
                                   e.msg, e.mark.line + 1, e.mark.column + 1));
   }
+  // One document a file: a second one (after a `---`) would otherwise be ignored without a word.
+  if (documents.size() > 1) {
+    const int line = documents[1].Mark().line;  // −1 for an empty document
+    throw ConfigError(
+        file, "",
+        fmt::format(
+            "the file holds {} YAML documents{}; give one document", documents.size(),
+            line >= 0 ? fmt::format(" (the second from line {})", line + 1) : std::string()));
+  }
+  const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
   return YamlNode(std::make_shared<const YamlNode::State>(
       YamlNode::State{root, "", std::make_shared<const std::string>(file)}));
 }
