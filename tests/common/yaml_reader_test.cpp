@@ -122,12 +122,13 @@ TEST(YamlReader, AQuotedNumberIsRefusedAndTheTextStaysText) {
 
 TEST(YamlReader, ASecondDocumentIsRefused) {
   const auto e = config_error([] { parse_yaml("a: 1\n---\nb: 2\n", "two.yaml"); });
-  EXPECT_STREQ(e.what(),
-               "two.yaml: the file holds 2 YAML documents (the second from line 3); give "
-               "one document");
+  EXPECT_STREQ(e.what(), "two.yaml: a second YAML document starts at line 2; give one document");
   // One document, with or without its `---`, and an empty file, are read as before.
   EXPECT_DOUBLE_EQ(parse_yaml("---\na: 1\n", "one.yaml").child("a").number(), 1.0);
   EXPECT_FALSE(parse_yaml("", "empty.yaml").has("a"));
+  // A comment before the first `---` is no document; `---` inside a line is no marker.
+  EXPECT_DOUBLE_EQ(parse_yaml("# c\n---\na: 1 # ---\nb: '---'\n", "c.yaml").child("a").number(),
+                   1.0);
 }
 
 // yaml-cpp passes any byte on; a sweep title with invalid UTF-8 then made sinew-sweep end in an
