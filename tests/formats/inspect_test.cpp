@@ -151,7 +151,8 @@ TEST(Tools, H5pyReadsTheFile) {
     py << R"(import sys, h5py
 f = h5py.File(sys.argv[1], "r")
 assert f.attrs["format"] == "sinew-model", f.attrs["format"]
-assert int(f.attrs["format_version"]) == 2
+assert int(f.attrs["format_version"]) == 3
+assert f["jaw/nodes"].shape == (12,) and f["jaw/axis"].shape == (3,)
 assert list(f["materials/name"].asstr()[:]) == ["fat", "muscle_tissue"]
 assert list(f["surfaces/role"].asstr()[:]) == ["sliding", "visual"]
 assert f["elements/nodes"].shape == (36, 8) and str(f["elements/nodes"].dtype) == "int32"

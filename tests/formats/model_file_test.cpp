@@ -278,10 +278,10 @@ TEST_F(BrokenFile, NotHdf5) {
 }
 
 TEST_F(BrokenFile, WrongVersion) {
-  set_version_attribute(path_, 3);
+  set_version_attribute(path_, 4);
   EXPECT_CONTAINS(read_error(path_),
-                  "/format_version: unsupported format version 3 (this build reads versions 1 to "
-                  "2)");
+                  "/format_version: unsupported format version 4 (this build reads versions 1 to "
+                  "3)");
   set_version_attribute(path_, 0);
   EXPECT_CONTAINS(read_error(path_), "unsupported format version 0");
 }
@@ -294,6 +294,7 @@ TEST_F(BrokenFile, VersionOneFileReadsWithoutTextureCoordinates) {
   }
   set_version_attribute(path_, 1);
   Model expected = every_feature_model();
+  expected.jaw.reset();  // versions 1 and 2 have no jaw: a /jaw there is not read
   for (auto& s : expected.surfaces) {
     s.uvs.clear();
     s.uv_triangles.clear();
@@ -302,6 +303,39 @@ TEST_F(BrokenFile, VersionOneFileReadsWithoutTextureCoordinates) {
   // A version 2 file must have them.
   set_version_attribute(path_, 2);
   EXPECT_CONTAINS(read_error(path_), "/surfaces/uv_offsets");
+}
+
+// A version 2 file (no jaw) is still read: the same model without a jaw.
+TEST_F(BrokenFile, VersionTwoFileReadsWithoutAJaw) {
+  delete_dataset(path_, "/jaw");
+  set_version_attribute(path_, 2);
+  Model expected = every_feature_model();
+  expected.jaw.reset();
+  EXPECT_EQ(read_model(path_), expected);
+  // A version 3 file without /jaw is a model without a jaw too.
+  set_version_attribute(path_, 3);
+  EXPECT_EQ(read_model(path_), expected);
+}
+
+TEST_F(BrokenFile, JawNodeThatIsAlsoRigid) {
+  set_value<std::int32_t>(path_, "/jaw/nodes", 0, 0);  // node 0: on the rigid bottom face
+  EXPECT_CONTAINS(read_error(path_), "/jaw/nodes[0]: node 0 is both rigid and on the jaw");
+}
+
+TEST_F(BrokenFile, JawAxisNotAUnitVector) {
+  set_value<double>(path_, "/jaw/axis", 1, 2.0);
+  EXPECT_CONTAINS(read_error(path_), "/jaw/axis: not a unit vector: length 2");
+}
+
+TEST_F(BrokenFile, JawForwardAlongItsAxis) {
+  set_value<double>(path_, "/jaw/forward", 0, 0.0);
+  set_value<double>(path_, "/jaw/forward", 1, 1.0);
+  EXPECT_CONTAINS(read_error(path_), "/jaw/forward: not normal to /jaw/axis: cosine 1");
+}
+
+TEST_F(BrokenFile, JawPivotWrongShape) {
+  delete_dataset(path_, "/jaw/pivot");
+  EXPECT_CONTAINS(read_error(path_), "/jaw/pivot: missing dataset");
 }
 
 TEST_F(BrokenFile, OutOfRangeTextureCorner) {

@@ -55,7 +55,7 @@ TEST(Summary, TextNamesEverything) {
        {"grid: 4 x 3 x 3 voxels of 0.001 m, origin (0.01, -0.02, 0.005) m",
         "nodes: 80, elements: 36", "bounding box: (0.01, -0.02, 0.005) to (0.014, -0.017, 0.008) m",
         "  fat: 1.75e-08 m^3 in 24 elements", "  frontalis_right: 7.2e-09 m^3 in 12 elements",
-        "constraints: 20 rigid nodes, 12 sliding nodes",
+        "constraints: 20 rigid nodes, 12 sliding nodes, 12 jaw nodes",
         "  skull (sliding): 4 vertices, 2 triangles, 12 sliding nodes",
         "  skin (visual): 20 vertices, 24 triangles, embedded", "x_min (16)", "corner (3)",
         "provenance: tool 'formats test' version '0.1.0', created '2026-11-21T06:49:00Z'",
@@ -67,7 +67,8 @@ TEST(Summary, TextNamesEverything) {
 TEST(Summary, JsonCarriesTheSameNumbers) {
   const auto j = nlohmann::json::parse(summary_json(summarize(testing::every_feature_model())));
   EXPECT_EQ(j["format"], "sinew-model");
-  EXPECT_EQ(j["format_version"], 2);
+  EXPECT_EQ(j["format_version"], 3);
+  EXPECT_EQ(j["jaw_nodes"], 12);
   EXPECT_EQ(j["nodes"], 80);
   EXPECT_EQ(j["elements"], 36);
   EXPECT_EQ(j["grid"]["dims"], nlohmann::json::array({4, 3, 3}));

@@ -19,8 +19,9 @@ namespace sinew::formats::testing {
 
 // 4 × 3 × 3 voxels of 1 mm; two layers (fat below 1.5 mm, muscle tissue above: the k = 1 row is
 // cut in half), two muscles, rigid bottom face, one partly filled element, a sliding plane
-// ("skull") next to the x_min face with its bindings, a visual surface ("skin") on the top face
-// embedded in the top elements, extra node/element sets and provenance with an input file.
+// ("skull") next to the x_min face with its bindings, a jaw (the x_max face above the bottom), a
+// visual surface ("skin") on the top face embedded in the top elements, extra node/element sets
+// and provenance with an input file.
 inline Model every_feature_model() {
   BoxSpec spec;
   spec.dims = {4, 3, 3};
@@ -100,6 +101,18 @@ inline Model every_feature_model() {
   }
   skin.uv_triangles = skin.triangles;  // texture coordinates: the top face mapped onto [0, 1]²
   m.surfaces.push_back(skin);
+
+  // A jaw: the x_max face above the rigid bottom, hinged about a line along y beside it.
+  Jaw jaw;
+  for (std::size_t n = 0; n < m.node_lattice.size(); ++n) {
+    const auto& l = m.node_lattice[n];
+    if (l[0] == nx && l[2] > 0) jaw.nodes.push_back(static_cast<Index>(n));
+  }
+  jaw.pivot = {o[0] + (nx + 1) * h, o[1], o[2] + nz * h};
+  jaw.axis = {0, 1, 0};
+  jaw.forward = {1, 0, 0};
+  jaw.incisal = {o[0] + nx * h, o[1] + h, o[2]};
+  m.jaw = jaw;
 
   m.node_sets.push_back(contact);
   m.element_sets.push_back({"corner", {0, 5, 35}});

@@ -6,6 +6,7 @@
 // the frown draws the inner brows together, the one-sided sneer lifts the left side only.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -107,12 +108,18 @@ const ExpressionRun& run(const std::string& name, const std::string& device,
   const auto at = scene.find(original);
   EXPECT_NE(at, std::string::npos);
   scene.replace(at, original.size(), "model: ../specs/" + model + ".h5");
-  // The scenes hold their peak to 0.4 s for the tissue to come to rest (docs/faces.md); the checks
-  // here (direction, symmetry, no inversion) hold from the end of the ramp, so CI stops at 0.1 s.
+  // The scenes hold their peak to 0.4 s for the tissue to come to rest (docs/faces.md); the
+  // muscles' checks here (direction, symmetry, no inversion) hold from the end of the ramp, so CI
+  // stops them at 0.1 s. The tissue follows the jaw more slowly (the chin and lips are carried by
+  // the whole lower face): those poses run to 0.4 s, and the chewing stroke (the tissue's own
+  // inertia, 6 times the steps) to its widest point, 0.12 s.
+  const std::map<std::string, std::string> cut = {
+      {"ah", "0.4"}, {"surprise", "0.4"}, {"oo", "0.4"}, {"chew", "0.12"}};
   const std::string held = "duration: 0.4";
   const auto h = scene.find(held);
   EXPECT_NE(h, std::string::npos);
-  if (h != std::string::npos) scene.replace(h, held.size(), "duration: 0.1");
+  if (h != std::string::npos)
+    scene.replace(h, held.size(), "duration: " + (cut.count(name) ? cut.at(name) : "0.1"));
   // The scenes let the sample head's forehead glide (its spec's sliding condition); a model
   // without one (the scan's spec holds its deep tissue) runs them without `sliding`.
   if (model.rfind("sample_head", 0) != 0) {
@@ -205,11 +212,66 @@ void expect_motion(const std::string& name, const ExpressionRun& r) {
     EXPECT_GT(u("upper_lip").z, 1.0);           // the lips come forward
     EXPECT_LT(u("mouth_corner_left").x, -1.0);  // the sphincter narrows the mouth
     EXPECT_GT(u("mouth_corner_right").x, 1.0);
+  } else if (name == "ah" || name == "surprise") {
+    // The jaw turned 7° (ah) or 10° (surprise) about the axis 12 mm in front of the tragi: the
+    // incisal point moves 7.5 (10.7) mm down and 9.5 (13.4) back, and the lower lip and chin
+    // follow it down and back; the upper lip stays (the lips part at the cut between them). At
+    // 4 mm at 0.4 s: lower lip (0.1, −5.2, −8.7), chin (−0.1, −4.4, −8.9), lips parted 4.6 mm (ah);
+    // (0.1, −6.4, −12.4), (−0.1, −5.9, −12.3), 6.0 mm (surprise).
+    const bool ah = name == "ah";
+    EXPECT_LT(u("lower_lip").y, ah ? -3.5 : -4.5);
+    EXPECT_LT(u("chin").y, ah ? -3.0 : -4.0);
+    EXPECT_LT(u("chin").z, ah ? -6.0 : -9.0);
+    EXPECT_LT(std::abs(u("upper_lip").y), 1.5);
+    EXPECT_GT(u("upper_lip").y - u("lower_lip").y, ah ? 3.0 : 4.0);  // the lips part
+    if (!ah) EXPECT_GT(u("brow_centre_left").y, 2.0);
+  } else if (name == "oo") {
+    // The pout with the jaw 3° open: upper lip (0.8, −1.7, 2.9), lower lip (0.7, −3.8, −1.4).
+    EXPECT_GT(u("upper_lip").z, 1.5);           // the lips forward, as the pout
+    EXPECT_LT(u("lower_lip").y, -2.5);          // with the jaw slightly open
+    EXPECT_LT(u("mouth_corner_left").x, -1.0);  // the sphincter narrows the mouth
+  } else if (name == "chew") {
+    // At its widest (0.12 s) the stroke is 8° open and 3 mm to the subject's left: the chin at
+    // (2.6, −4.9, −10.3) mm.
+    EXPECT_GT(u("chin").x, 1.5);
+    EXPECT_LT(u("chin").y, -3.0);
+    EXPECT_LT(u("chin").z, -6.0);
   } else if (name == "grimace") {
     EXPECT_LT(u("brow_inner_left").x, -0.5);  // the frown in it
     // The corners drawn back (0.48 mm at 4 mm, 0.6 at 3 mm; 0.5 and 0.7 before the depressors'
     // self-intersecting sheets were filled by the winding number, docs/voxelizer.md).
     EXPECT_LT(u("mouth_corner_left").z, -0.3);
+  }
+}
+
+// The sample head's jaw (rig.jaw, data/specs/sample_head_4mm.yaml): the mandible cut from the
+// skull below the lips, hinged 12 mm in front of the tragi, the lips cut apart.
+TEST(SampleHeadJaw, TheMandibleIsCutFromTheSkullAlongTheLandmarksPlanes) {
+  const auto m = formats::read_model((workspace() / "specs/sample_head_4mm.h5").string());
+  ASSERT_TRUE(m.jaw);
+  const auto& j = *m.jaw;
+  // Tragi (±74.773, 3.490, 6.623) mm: the pivot between them, 12 mm along the face's forward
+  // (0, −0.0391, 0.9992), at (0, 3.020, 18.614) mm; the axis to the subject's left.
+  EXPECT_NEAR(j.pivot[0], 0, 1e-9);
+  EXPECT_NEAR(j.pivot[1], 3.020e-3, 1e-6);
+  EXPECT_NEAR(j.pivot[2], 18.614e-3, 1e-6);
+  EXPECT_NEAR(j.axis[0], 1, 1e-9);
+  EXPECT_NEAR(j.forward[2], 0.99923, 1e-5);
+  // The incisal point 12 mm behind the stomion (0, −71.386, 96.465) mm: (0, −70.916, 84.474).
+  EXPECT_NEAR(j.incisal[1], -70.916e-3, 1e-6);
+  EXPECT_NEAR(j.incisal[2], 84.474e-3, 1e-6);
+  EXPECT_GT(j.nodes.size(), 200u);
+  // Every jaw node lies below the occlusal plane (through the stomion, normal to the face's up =
+  // forward × axis) and at most 10 mm behind the joint along forward; none is rigid.
+  const Vec3d f{j.forward[0], j.forward[1], j.forward[2]}, a{j.axis[0], j.axis[1], j.axis[2]};
+  const Vec3d up = cross(f, a), stomion{0, -71.386e-3, 96.465e-3};
+  const Vec3d pivot{j.pivot[0], j.pivot[1], j.pivot[2]};
+  for (const auto nd : j.nodes) {
+    const auto q = m.node_position(nd);
+    const Vec3d p{q[0], q[1], q[2]};
+    EXPECT_LT(dot(p - stomion, up), 0.0) << nd;
+    EXPECT_GT(dot(p - pivot, f), -10e-3 - 1e-9) << nd;
+    EXPECT_FALSE(std::binary_search(m.rigid_nodes.begin(), m.rigid_nodes.end(), nd)) << nd;
   }
 }
 
@@ -226,7 +288,14 @@ TEST_P(FaceExpression, RunsWithoutInversionAndMovesAsExpected) {
   EXPECT_EQ(r.summary.status, "completed");
   EXPECT_EQ(r.summary.steps_done, r.summary.steps_planned);
   expect_motion(name, r);
-  if (name != "sneer") {  // the sneer is one-sided
+  if (r.summary.jaw_nodes > 0) {
+    // The incisal point turns about the axis 99.02 mm away: chord 2 r sin(θ/2).
+    const std::map<std::string, double> opening_mm = {
+        {"ah", 12.090}, {"surprise", 17.260}, {"oo", 5.184}};
+    if (const auto it = opening_mm.find(name); it != opening_mm.end())
+      EXPECT_NEAR(1e3 * r.summary.jaw_max_incisal_opening, it->second, 0.005);
+  }
+  if (name != "sneer" && name != "chew") {  // the sneer and the chewing stroke are one-sided
     const auto [err, umax] = mirror_error(r);
     EXPECT_GT(umax, 1e-4);  // it moved (> 0.1 mm)
     EXPECT_LE(err, 0.01 * umax) << "largest displacement " << umax * 1e3 << " mm";
@@ -239,7 +308,8 @@ std::string name_of(const ::testing::TestParamInfo<std::tuple<std::string, std::
 
 INSTANTIATE_TEST_SUITE_P(SampleHead, FaceExpression,
                          ::testing::Combine(::testing::Values("brow_raise", "frown", "smile",
-                                                              "sneer", "pout", "grimace"),
+                                                              "sneer", "pout", "grimace", "ah",
+                                                              "surprise", "oo", "chew"),
                                             ::testing::Values("cpu", "cuda")),
                          name_of);
 

@@ -59,6 +59,7 @@ double height_over(const Surface& s, Index t, const Point& p) {
 
 std::string constraint_of(const Model& m, Index n) {
   if (std::binary_search(m.rigid_nodes.begin(), m.rigid_nodes.end(), n)) return "rigid";
+  if (m.jaw && std::binary_search(m.jaw->nodes.begin(), m.jaw->nodes.end(), n)) return "jaw";
   const auto it =
       std::lower_bound(m.sliding.begin(), m.sliding.end(), n,
                        [](const SlidingBinding& b, Index node) { return b.node < node; });

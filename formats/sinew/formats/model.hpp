@@ -1,6 +1,6 @@
 #pragma once
-// The in-memory form of a sinew model file (format version 2; version 1 files, which have no
-// texture coordinates, are still read). docs/model-format.md documents the
+// The in-memory form of a sinew model file (format version 3; version 1 files, which have no
+// texture coordinates, and version 2 files, which have no jaw, are still read). docs/model-format.md documents the
 // file dataset by dataset; this struct mirrors it one to one. SI units throughout: metres,
 // kilograms, seconds, pascals.
 //
@@ -18,13 +18,15 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace sinew::formats {
 
-inline constexpr int kModelFormatVersion = 2;
-// The oldest version the reader accepts: version 1 lacks the surfaces' texture coordinates.
+inline constexpr int kModelFormatVersion = 3;
+// The oldest version the reader accepts: version 1 lacks the surfaces' texture coordinates and
+// versions 1 and 2 the jaw (they are read as models without one).
 inline constexpr int kModelFormatOldestVersion = 1;
 inline constexpr const char* kModelFormatName = "sinew-model";
 
@@ -140,6 +142,21 @@ struct NamedSet {
   bool operator==(const NamedSet&) const = default;
 };
 
+// The mandible as a rigid body apart from the skull (docs/model-format.md "/jaw", docs/faces.md
+// "The jaw"): its nodes move as one rigid body that a scene drives (rotation about the
+// temporomandibular axis, protrusion, lateral shift); without a scene's `jaw:` they are held like
+// rigid nodes (the jaw closed). Frame: `axis` (unit, the subject's left: the hinge), `forward` (unit,
+// normal to axis: protrusion), up = forward × axis. Opening by θ rotates about +axis through
+// `pivot`, so the chin moves down and back.
+struct Jaw {
+  std::vector<Index> nodes;  // sorted, unique; neither rigid nor sliding
+  Point pivot{0, 0, 0};      // m, on the temporomandibular axis (midway between the condyles)
+  Point axis{1, 0, 0};       // unit
+  Point forward{0, 0, 1};    // unit, normal to axis
+  Point incisal{0, 0, 0};    // m, the incisal point at rest (where the opening is measured)
+  bool operator==(const Jaw&) const = default;
+};
+
 struct InputFile {
   std::string path;
   std::string sha256;  // lowercase hex
@@ -171,6 +188,7 @@ struct Model {
   std::vector<Muscle> muscles;
   std::vector<Index> rigid_nodes;       // sorted, unique
   std::vector<SlidingBinding> sliding;  // sorted by node, one binding per node
+  std::optional<Jaw> jaw;               // since version 3; none: no jaw
   std::vector<Surface> surfaces;
   std::vector<NamedSet> node_sets;
   std::vector<NamedSet> element_sets;

@@ -155,6 +155,17 @@ void write_all(Writer& w, const Model& m) {
   w.array("/constraints/sliding_rest_triangle",
           column(sl, [](const SlidingBinding& x) { return x.rest_triangle; }));
 
+  // The jaw (version 3): present only when the model has one.
+  if (m.jaw) {
+    const Jaw& j = *m.jaw;
+    w.group("/jaw");
+    w.array("/jaw/nodes", j.nodes);
+    w.array("/jaw/pivot", std::vector<double>(j.pivot.begin(), j.pivot.end()));
+    w.array("/jaw/axis", std::vector<double>(j.axis.begin(), j.axis.end()));
+    w.array("/jaw/forward", std::vector<double>(j.forward.begin(), j.forward.end()));
+    w.array("/jaw/incisal", std::vector<double>(j.incisal.begin(), j.incisal.end()));
+  }
+
   const auto& su = m.surfaces;
   w.group("/surfaces");
   w.strings("/surfaces/name", column(su, [](const Surface& x) { return x.name; }));
@@ -274,6 +285,7 @@ class Reader {
     return hdf5::read_strings(file_, path, path_);
   }
   std::string string(const std::string& path) { return hdf5::read_string(file_, path, path_); }
+  bool has(const std::string& path) const { return hdf5::exists(file_, path); }
   // Names of the datasets in a group, in creation order when the group tracks it (files of this
   // writer), else in name order.
   std::vector<std::string> members(const std::string& group) {
@@ -443,6 +455,21 @@ Model read_all(Reader& r, int version) {
     for (std::size_t i = 0; i < node.size(); ++i) {
       m.sliding.push_back({node[i], surface[i], distance[i], triangle[i]});
     }
+  }
+
+  // The jaw: since version 3, and only in models that have one.
+  if (version >= 3 && r.has("/jaw")) {
+    Jaw j;
+    j.nodes = r.array<std::int32_t>("/jaw/nodes");
+    const auto point = [&](const char* path) {
+      const auto v = r.fixed<double>(path, 3);
+      return Point{v[0], v[1], v[2]};
+    };
+    j.pivot = point("/jaw/pivot");
+    j.axis = point("/jaw/axis");
+    j.forward = point("/jaw/forward");
+    j.incisal = point("/jaw/incisal");
+    m.jaw = std::move(j);
   }
 
   {

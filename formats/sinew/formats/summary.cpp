@@ -45,6 +45,7 @@ ModelSummary summarize(const Model& m) {
   }
   s.rigid_nodes = m.rigid_nodes.size();
   s.sliding_nodes = m.sliding.size();
+  s.jaw_nodes = m.jaw ? m.jaw->nodes.size() : 0;
   for (const auto& sf : m.surfaces) {
     s.surfaces.push_back({sf.name, sf.role, sf.vertices.size(), sf.triangles.size(), 0,
                           !sf.vertices.empty() && sf.embedding_element.size() == sf.vertices.size(),
@@ -81,8 +82,8 @@ std::string summary_text(const ModelSummary& s) {
   for (const auto& p : s.muscles) {
     line(fmt::format("  {}: {:.6g} m^3 in {} elements", p.name, p.volume, p.elements));
   }
-  line(
-      fmt::format("constraints: {} rigid nodes, {} sliding nodes", s.rigid_nodes, s.sliding_nodes));
+  line(fmt::format("constraints: {} rigid nodes, {} sliding nodes, {} jaw nodes", s.rigid_nodes,
+                   s.sliding_nodes, s.jaw_nodes));
   line(fmt::format("surfaces ({}):", s.surfaces.size()));
   for (const auto& sf : s.surfaces) {
     std::string extra;
@@ -137,6 +138,7 @@ std::string summary_json(const ModelSummary& s) {
   j["muscles"] = parts(s.muscles);
   j["rigid_nodes"] = s.rigid_nodes;
   j["sliding_nodes"] = s.sliding_nodes;
+  j["jaw_nodes"] = s.jaw_nodes;
   ordered_json surfaces = ordered_json::array();
   for (const auto& sf : s.surfaces) {
     surfaces.push_back({{"name", sf.name},

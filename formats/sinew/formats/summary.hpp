@@ -36,7 +36,7 @@ struct ModelSummary {
   double tissue_volume = 0;                    // m³, Σ of all material fractions · h³
   std::vector<Part> materials;                 // in the order of the materials table
   std::vector<Part> muscles;                   // in the order of the muscles
-  std::size_t rigid_nodes = 0, sliding_nodes = 0;
+  std::size_t rigid_nodes = 0, sliding_nodes = 0, jaw_nodes = 0;
   std::vector<SurfaceInfo> surfaces;
   std::vector<SetInfo> node_sets, element_sets;
   Provenance provenance;

@@ -40,6 +40,7 @@ class Validator {
     muscles();
     surfaces();
     constraints();
+    jaw();
     sets(m_.node_sets, "/node_sets", m_.node_count(), "node");
     sets(m_.element_sets, "/element_sets", m_.element_count(), "element");
     provenance();
@@ -454,6 +455,53 @@ class Validator {
                          sf.triangles.size(), sf.name));
       }
     }
+  }
+
+  // The jaw: nodes in range, sorted, unique, neither rigid nor sliding; a finite frame of unit,
+  // orthogonal axis and forward; finite pivot and incisal point.
+  void jaw() {
+    if (!m_.jaw) return;
+    const Jaw& j = *m_.jaw;
+    const std::size_t n_count = m_.node_count();
+    if (j.nodes.empty()) fail("/jaw/nodes", "the jaw has no node");
+    for (std::size_t i = 0; i < j.nodes.size(); ++i) {
+      const auto idx = static_cast<std::int64_t>(i);
+      const Index nd = j.nodes[i];
+      if (nd < 0 || static_cast<std::size_t>(nd) >= n_count)
+        fail("/jaw/nodes", idx, fmt::format("node id {} out of range [0, {})", nd, n_count));
+      if (i > 0 && !(j.nodes[i - 1] < nd)) {
+        fail("/jaw/nodes", idx,
+             fmt::format("node ids not sorted and unique: {} follows {}", nd, j.nodes[i - 1]));
+      }
+      if (std::binary_search(m_.rigid_nodes.begin(), m_.rigid_nodes.end(), nd))
+        fail("/jaw/nodes", idx, fmt::format("node {} is both rigid and on the jaw", nd));
+      const auto bound =
+          std::lower_bound(m_.sliding.begin(), m_.sliding.end(), nd,
+                           [](const SlidingBinding& b, Index node) { return b.node < node; });
+      if (bound != m_.sliding.end() && bound->node == nd)
+        fail("/jaw/nodes", idx, fmt::format("node {} is both sliding and on the jaw", nd));
+    }
+    const auto finite = [&](const Point& p, const char* path) {
+      for (double x : p)
+        if (!std::isfinite(x))
+          fail(path, fmt::format("not finite: ({}, {}, {})", p[0], p[1], p[2]));
+    };
+    const auto length = [](const Point& p) {
+      return std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    };
+    for (const auto& [p, path] :
+         {std::pair{j.pivot, "/jaw/pivot"}, std::pair{j.axis, "/jaw/axis"},
+          std::pair{j.forward, "/jaw/forward"}, std::pair{j.incisal, "/jaw/incisal"}})
+      finite(p, path);
+    for (const auto& [p, path] :
+         {std::pair{j.axis, "/jaw/axis"}, std::pair{j.forward, "/jaw/forward"}}) {
+      if (std::abs(length(p) - 1) > kUnitLengthTolerance)
+        fail(path, fmt::format("not a unit vector: length {}", length(p)));
+    }
+    const double cosine =
+        j.axis[0] * j.forward[0] + j.axis[1] * j.forward[1] + j.axis[2] * j.forward[2];
+    if (std::abs(cosine) > kUnitLengthTolerance)
+      fail("/jaw/forward", fmt::format("not normal to /jaw/axis: cosine {}", cosine));
   }
 
   void sets(const std::vector<NamedSet>& named, const std::string& group, std::size_t count,

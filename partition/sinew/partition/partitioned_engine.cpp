@@ -65,12 +65,12 @@ struct StepCheck {
 };
 
 // The scalars of constraint entry k's work record (constraint_work): u(n+1), u(n−1) and the
-// projections' moves, then u* of each of its prescribed sets.
+// projections' moves, then u* of each of its prescribed sets (and of its jaw move).
 template <typename T>
 int record_size(const simulator::ConstraintArrays<T>& c, std::size_t k) {
   int size = 9;
   for (std::int32_t q = c.offset[k]; q < c.offset[k + 1]; ++q)
-    if ((c.op[std::size_t(q)] >> simulator::kOpShift) == simulator::kOpPrescribe) size += 3;
+    if (simulator::op_prescribes(c.op[std::size_t(q)])) size += 3;
   return size;
 }
 
@@ -456,7 +456,7 @@ double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
       put(up_[i]);
       put(projected_[std::size_t(k)]);
       for (std::int32_t q = d.offset[k]; q < d.offset[k + 1]; ++q)
-        if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
+        if (simulator::op_prescribes(d.op[q]))
           put(prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)]);
     }
     check_mpi(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, records_.data(),
@@ -479,7 +479,7 @@ double PartitionedCpuEngine<T>::constraint_work(const T* factor) {
         };
         const Vec3<T> v = get(), vp = get(), projected = get();
         for (std::int32_t q = d.offset[k]; q < d.offset[k + 1]; ++q)
-          if ((d.op[q] >> simulator::kOpShift) == simulator::kOpPrescribe)
+          if (simulator::op_prescribes(d.op[q]))
             prescribed_free_[std::size_t(d.op[q] & simulator::kOpArg)] = get();
         simulator::add_program_work(d, d.node[k], d.offset[k], d.offset[k + 1], factor, v, vp,
                                     projected, w);

@@ -9,6 +9,7 @@
 #include "sim_io_support.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/simulator/run/scene.hpp"
+#include "sinew/simulator/run/scene_jaw.hpp"
 
 namespace sinew::simulator {
 namespace {
@@ -376,6 +377,19 @@ INSTANTIATE_TEST_SUITE_P(
                   "expected an integer"},
         ErrorCase{"key_twice", "output: {interval: 0.1, interval: 0.2}\n", "output.interval",
                   "given twice"},
+        ErrorCase{"jaw_unknown_key", "jaw: {open_deg: 10}\n", "jaw.open_deg",
+                  "unknown key 'open_deg'"},
+        ErrorCase{"jaw_empty", "jaw: {}\n", "jaw", "at least one of opening_deg"},
+        ErrorCase{"jaw_opening_out_of_range", "jaw: {opening_deg: [[0, 0], [0.1, 45]]}\n",
+                  "jaw.opening_deg", "must lie in [0, 40] degrees"},
+        ErrorCase{"jaw_closing_below_rest", "jaw: {opening_deg: -2}\n", "jaw.opening_deg",
+                  "point 0 has -2"},
+        ErrorCase{"jaw_protrusion_out_of_range", "jaw: {protrusion_mm: {ramp: 0.1, peak: 15}}\n",
+                  "jaw.protrusion_mm", "must lie in [-1, 12] mm"},
+        ErrorCase{"jaw_lateral_out_of_range", "jaw: {lateral_mm: -16}\n", "jaw.lateral_mm",
+                  "must lie in [-15, 15] mm"},
+        ErrorCase{"jaw_time_backwards", "jaw: {opening_deg: [[0.1, 0], [0.05, 5]]}\n",
+                  "jaw.opening_deg", "not monotone"},
         ErrorCase{"raw_not_yaml", "model: [unclosed\n", "", "not valid YAML"},
         ErrorCase{"raw_not_a_map", "- a\n- b\n", "", "a scene is a mapping"}),
     [](const ::testing::TestParamInfo<ErrorCase>& info) { return std::string(info.param.name); });
@@ -401,6 +415,75 @@ TEST(SceneParse, MissingFileIsAnIoError) {
 
 Scene scene_for(const std::string& body) {
   return parse_scene_text("model: box.h5\nduration: 0.1\n" + body, "r.yaml", "");
+}
+
+// A small box whose x_max face above the bottom row is a jaw hinged about a line along y.
+formats::Model box_with_jaw() {
+  auto model = small_box();
+  formats::Jaw jaw;
+  for (std::size_t n = 0; n < model.node_count(); ++n)
+    if (model.node_lattice[n][0] == 4 && model.node_lattice[n][2] > 0)
+      jaw.nodes.push_back(Index(n));
+  jaw.pivot = {0.05, 0, 0.04};
+  jaw.axis = {0, 1, 0};
+  jaw.forward = {1, 0, 0};
+  jaw.incisal = {0.04, 0.02, 0};
+  model.jaw = jaw;
+  return model;
+}
+
+TEST(SceneResolve, TheJawInDegreesAndMillimetresBecomesRadiansAndMetres) {
+  const auto model = box_with_jaw();
+  const auto r =
+      resolve_scene(scene_for("effects: [elasticity]\njaw:\n  opening_deg: {ramp: 0.05, peak: 30}\n"
+                              "  protrusion_mm: [[0, 0], [0.05, 4]]\n"),
+                    model);
+  ASSERT_TRUE(r.setup.jaw);
+  const auto& j = *r.setup.jaw;
+  EXPECT_EQ(j.nodes, model.jaw->nodes);
+  EXPECT_NEAR(j.opening.at(0.05), 30 * std::acos(-1.0) / 180, 1e-15);
+  EXPECT_NEAR(j.protrusion.at(0.05), 4e-3, 1e-18);
+  EXPECT_TRUE(j.lateral.points.empty());  // left out: 0 throughout
+  EXPECT_EQ(j.pose(1.0).lateral, 0.0);
+  for (const Index nd : j.nodes)
+    EXPECT_FALSE(std::binary_search(r.setup.rigid_nodes.begin(), r.setup.rigid_nodes.end(), nd));
+  // The incisal point, r = (−10, ·, −40) mm from the pivot in the plane normal to the axis (y),
+  // turned 30° about +y, (x, z) → (x cos θ + z sin θ, −x sin θ + z cos θ), and moved 4 mm along x.
+  const double c = std::cos(std::acos(-1.0) / 6), sn = std::sin(std::acos(-1.0) / 6);
+  const double ux = (-0.01 * c - 0.04 * sn) + 0.01 + 4e-3, uz = (0.01 * sn - 0.04 * c) + 0.04;
+  EXPECT_NEAR(incisal_opening(j, 0.05), std::hypot(ux, uz), 1e-15);
+  EXPECT_EQ(incisal_opening(j, 0.0), 0.0);
+}
+
+TEST(SceneResolve, AModelJawWithoutASceneJawIsHeldClosed) {
+  const auto model = box_with_jaw();
+  const auto r = resolve_scene(scene_for("effects: [elasticity]\n"), model);
+  EXPECT_FALSE(r.setup.jaw);
+  for (const Index nd : model.jaw->nodes)
+    EXPECT_TRUE(std::binary_search(r.setup.rigid_nodes.begin(), r.setup.rigid_nodes.end(), nd));
+}
+
+TEST(SceneResolve, AJawOnAModelWithoutOneIsRefused) {
+  try {
+    resolve_scene(scene_for("effects: [elasticity]\njaw: {opening_deg: 5}\n"), small_box());
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.field(), "jaw");
+    EXPECT_NE(std::string(e.what()).find("the model has no jaw"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneResolve, JawNodesFixedByTheSceneAreRefused) {
+  try {
+    resolve_scene(scene_for("effects: [elasticity]\njaw: {opening_deg: 5}\n"
+                            "boundary_conditions:\n  - {type: fixed, set: x_max}\n"),
+                  box_with_jaw());
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.field(), "jaw");
+    EXPECT_NE(std::string(e.what()).find("nodes of the jaw are also fixed"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(SceneResolve, MapsEveryKeyOntoTheSetup) {

@@ -7,16 +7,6 @@
 
 namespace sinew::voxelizer {
 
-namespace {
-
-Vec3d voxel_centre(const formats::VoxelGrid& g, const formats::Lattice& l) {
-  const double h = g.voxel_size;
-  return {g.origin[0] + h * (l[0] + 0.5), g.origin[1] + h * (l[1] + 0.5),
-          g.origin[2] + h * (l[2] + 0.5)};
-}
-
-}  // namespace
-
 bool crop_contains(const CropSpec& crop, const Vec3d& p) {
   if (crop.box && !crop.box->contains(p)) return false;
   if (crop.points.empty()) return true;
@@ -55,20 +45,7 @@ BoundingBox crop_bounds(const CropSpec& crop, const BoundingBox& bounds, const s
 
 std::int64_t crop_fractions(VoxelFractions& f, const formats::VoxelGrid& grid,
                             const CropSpec& crop) {
-  VoxelFractions out;
-  out.field_evaluations = f.field_evaluations;
-  for (std::size_t v = 0; v < f.voxels.size(); ++v) {
-    if (!crop_contains(crop, voxel_centre(grid, f.voxels[v]))) continue;
-    out.voxels.push_back(f.voxels[v]);
-    for (auto q = f.offsets[v]; q < f.offsets[v + 1]; ++q) {
-      out.labels.push_back(f.labels[static_cast<std::size_t>(q)]);
-      out.fractions.push_back(f.fractions[static_cast<std::size_t>(q)]);
-    }
-    out.offsets.push_back(static_cast<std::int64_t>(out.labels.size()));
-  }
-  const auto dropped = static_cast<std::int64_t>(f.voxels.size() - out.voxels.size());
-  f = std::move(out);
-  return dropped;
+  return drop_voxels(f, grid, [&](const Vec3d& c) { return !crop_contains(crop, c); });
 }
 
 std::vector<formats::Index> cut_nodes(const formats::Model& model, const CropSpec& crop) {

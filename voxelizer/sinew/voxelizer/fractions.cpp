@@ -578,4 +578,28 @@ VoxelFractions compute_fractions(const FractionProblem& p,
   return out;
 }
 
+Vec3d voxel_centre(const formats::VoxelGrid& g, const formats::Lattice& l) {
+  const double h = g.voxel_size;
+  return {g.origin[0] + h * (l[0] + 0.5), g.origin[1] + h * (l[1] + 0.5),
+          g.origin[2] + h * (l[2] + 0.5)};
+}
+
+std::int64_t drop_voxels(VoxelFractions& f, const formats::VoxelGrid& grid,
+                         const std::function<bool(const Vec3d&)>& drop) {
+  VoxelFractions out;
+  out.field_evaluations = f.field_evaluations;
+  for (std::size_t v = 0; v < f.voxels.size(); ++v) {
+    if (drop(voxel_centre(grid, f.voxels[v]))) continue;
+    out.voxels.push_back(f.voxels[v]);
+    for (auto q = f.offsets[v]; q < f.offsets[v + 1]; ++q) {
+      out.labels.push_back(f.labels[static_cast<std::size_t>(q)]);
+      out.fractions.push_back(f.fractions[static_cast<std::size_t>(q)]);
+    }
+    out.offsets.push_back(static_cast<std::int64_t>(out.labels.size()));
+  }
+  const auto dropped = static_cast<std::int64_t>(f.voxels.size() - out.voxels.size());
+  f = std::move(out);
+  return dropped;
+}
+
 }  // namespace sinew::voxelizer

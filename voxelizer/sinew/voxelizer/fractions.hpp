@@ -116,4 +116,12 @@ VoxelFractions compute_fractions(
     const FractionProblem& problem,
     const std::function<void(std::int64_t, std::int64_t)>& progress = {});
 
+// The centre of voxel l of grid g (m).
+Vec3d voxel_centre(const formats::VoxelGrid& g, const formats::Lattice& l);
+
+// Removes the voxels whose centre (m) `drop` selects, their fractions with them (order kept);
+// returns how many were removed.
+std::int64_t drop_voxels(VoxelFractions& f, const formats::VoxelGrid& grid,
+                         const std::function<bool(const Vec3d&)>& drop);
+
 }  // namespace sinew::voxelizer

@@ -1,15 +1,13 @@
 // Each rig muscle's recipe from the landmarks: where it starts and ends, how wide, how deep, how
 // thick. Anatomy (origins, insertions, layering) from Gray's Anatomy (41st ed., ch. 29, "Face and
 // scalp"); depths and thicknesses in mm, chosen within the ranges docs/faces.md cites. Positions
-// are built in the face's own frame, so the recipes hold for any orientation of the head:
-//   lat  (per side): from the other eye's outer corner to this one's;
-//   up:  from the chin to the hairline, made normal to lat;
-//   fwd: normal to both, pointing from between the tragi towards the nose's tip;
-// offsets below are in mm along these.
+// are built in the face's own frame (face_frame.hpp), so the recipes hold for any orientation of
+// the head; offsets below are in mm along its directions.
 #include <algorithm>
 #include <cmath>
 
 #include "sinew/common/error.hpp"
+#include "sinew/voxelizer/face_frame.hpp"
 #include "sinew/voxelizer/rig.hpp"
 
 namespace sinew::voxelizer {
@@ -22,37 +20,6 @@ Vec3d unit(const Vec3d& v) {
 }
 Vec3d lerp(const Vec3d& a, const Vec3d& b, double t) {
   return a + t * (b - a);
-}
-
-struct Face {
-  const Landmarks& l;
-  Vec3d right, up, fwd;
-  Vec3d at(const std::string& n) const { return l.at(n); }
-  Vec3d side(const std::string& n, bool left) const {
-    return l.at(n + (left ? "_left" : "_right"));
-  }
-  Vec3d lat(bool left) const { return left ? -1.0 * right : right; }
-};
-
-Face face_frame(const Landmarks& l) {
-  Face f{l, {}, {}, {}};
-  const Vec3d across = l.at("eye_outer_right") - l.at("eye_outer_left");
-  const Vec3d u = l.at("hairline") - l.at("chin");
-  // Degenerate points would give no frame (and NaN muscles): say which.
-  if (!(norm(across) > 1e-3)) {
-    throw ConfigError(l.file.string(), "landmarks.eye_outer_left",
-                      "the eyes' outer corners are less than 1 mm apart");
-  }
-  f.right = unit(across);
-  if (!(norm(u - dot(u, f.right) * f.right) > 1e-2)) {
-    throw ConfigError(l.file.string(), "landmarks.hairline",
-                      "hairline and chin are less than 10 mm apart across the eyes' line");
-  }
-  f.up = unit(u - dot(u, f.right) * f.right);
-  f.fwd = cross(f.up, f.right);
-  const Vec3d ahead = l.at("nose_tip") - 0.5 * (l.at("tragus_left") + l.at("tragus_right"));
-  if (dot(f.fwd, ahead) < 0) f.fwd = -1.0 * f.fwd;
-  return f;
 }
 
 RigRecipe sheet(std::string name, Vec3d o, Vec3d i, double w_o, double w_i, double d_o, double d_i,
@@ -88,7 +55,7 @@ RigRecipe ring(std::string name, Vec3d centre, Vec3d axis, Vec3d major, double a
 }
 
 // One side's (or the midline's) recipe of a rig muscle.
-RigRecipe recipe(const Face& f, const std::string& base, bool left) {
+RigRecipe recipe(const FaceFrame& f, const std::string& base, bool left) {
   const std::string name = base + (left ? "_left" : "_right");
   const Vec3d lat = f.lat(left), up = f.up;
   const Vec3d mouth_corner = f.side("mouth_corner", left);
@@ -164,7 +131,7 @@ RigRecipe recipe(const Face& f, const std::string& base, bool left) {
 
 std::vector<RigRecipe> rig_recipes(const Landmarks& landmarks,
                                    const std::vector<std::string>& names, double depth_scale) {
-  const Face f = face_frame(landmarks);
+  const FaceFrame f = face_frame(landmarks);
   std::vector<RigRecipe> out;
   for (const auto& base : rig_muscle_names()) {
     if (std::find(names.begin(), names.end(), base) == names.end()) continue;

@@ -28,7 +28,7 @@ const std::vector<std::string>& rig_muscle_names() {
 RigSpec parse_rig_spec(const YamlNode& n, const std::filesystem::path& folder, LengthUnit units) {
   n.expect_map();
   n.allow_keys({"landmarks", "muscles", "material", "reference_stress", "depth_scale",
-                "landmark_tolerance", "min_inside"});
+                "landmark_tolerance", "min_inside", "jaw"});
   RigSpec r;
   r.field = n.path();
   const auto l = n.require("landmarks");
@@ -74,6 +74,7 @@ RigSpec parse_rig_spec(const YamlNode& n, const std::filesystem::path& folder, L
       throw n.child("min_inside").error("must be in (0, 1]");
     }
   }
+  if (n.has("jaw")) r.jaw = n.child("jaw").boolean();
   return r;
 }
 

@@ -11,6 +11,7 @@
 //     depth_scale: 1                   # multiplies every muscle's depth and thickness (default 1)
 //     landmark_tolerance: 2            # spec units: a landmark farther off the skin is an error
 //     min_inside: 0.9                  # fraction of each muscle that must lie in the tissue
+//     jaw: true                        # the mandible apart from the skull (jaw.hpp; default false)
 //
 // Units: lengths in this struct in metres.
 #include <filesystem>
@@ -33,6 +34,7 @@ struct RigSpec {
   double depth_scale = 1.0;
   double landmark_tolerance = 0.002;  // m
   double min_inside = 0.9;
+  bool jaw = false;  // cut the mandible from the skull (needs `inner`): the model's /jaw
   std::string field = "rig";
 };
 

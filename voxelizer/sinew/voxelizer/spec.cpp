@@ -687,7 +687,8 @@ std::string spec_to_json(const Spec& spec) {
                 {"reference_stress", spec.rig->reference_stress},
                 {"depth_scale", spec.rig->depth_scale},
                 {"landmark_tolerance_m", spec.rig->landmark_tolerance},
-                {"min_inside", spec.rig->min_inside}};
+                {"min_inside", spec.rig->min_inside},
+                {"jaw", spec.rig->jaw}};
   }
   return j.dump();
 }

@@ -32,6 +32,8 @@ std::string summary_json(const Summary& s) {
   j["sliding_nodes"] = s.sliding_nodes;
   j["cropped_voxels"] = s.cropped_voxels;
   j["cut_nodes"] = s.cut_nodes;
+  j["jaw_nodes"] = s.jaw_nodes;
+  j["jaw_cut_voxels"] = s.jaw_cut_voxels;
   for (const auto& [n, c] : s.node_sets) j["node_sets"][n] = c;
   for (const auto& m : s.meshes) {
     const auto& d = m.diagnostics;
@@ -91,6 +93,9 @@ std::string summary_text(const Summary& s) {
   if (s.cut_nodes > 0)
     line("cut nodes      %lld (on the crop's cut, held rigid)",
          static_cast<long long>(s.cut_nodes));
+  if (s.jaw_nodes > 0)
+    line("jaw nodes      %lld (the mandible; %lld voxels cut between the lips and teeth)",
+         static_cast<long long>(s.jaw_nodes), static_cast<long long>(s.jaw_cut_voxels));
   for (const auto& [n, c] : s.node_sets)
     line("  node set %-20s %lld nodes", n.c_str(), static_cast<long long>(c));
   o << "surfaces\n";

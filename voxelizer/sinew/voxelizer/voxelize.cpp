@@ -25,6 +25,7 @@
 #include "sinew/voxelizer/embedding.hpp"
 #include "sinew/voxelizer/fibres.hpp"
 #include "sinew/voxelizer/fractions.hpp"
+#include "sinew/voxelizer/jaw.hpp"
 #include "sinew/voxelizer/mesh_bounds.hpp"
 #include "sinew/voxelizer/mesh_source.hpp"
 #include "sinew/voxelizer/offset.hpp"
@@ -136,6 +137,7 @@ class Pipeline {
   const VoxelizeOptions& options_;
   VoxelizeResult result_;
   double h_ = 0;
+  std::optional<JawGeometry> jaw_;  // rig.jaw
 
   LoadedMesh outer_;
   std::optional<LoadedMesh> inner_;
@@ -490,6 +492,7 @@ class Pipeline {
     result_.summary.field_evaluations = fractions_.field_evaluations;
     if (spec_.crop)
       result_.summary.cropped_voxels = crop_fractions(fractions_, p.grid, *spec_.crop);
+    if (spec_.rig && spec_.rig->jaw) cut_for_the_jaw(p.grid);
     if (fractions_.voxels.empty()) {
       throw GeometryError(spec_.outer.describe(), "outer",
                           "no tissue at this resolution (voxel size " + std::to_string(h_) +
@@ -689,8 +692,10 @@ class Pipeline {
         if (r.per_condition[i] == 0) warn(spec_.boundary[i].field + ": selects no node");
       }
     }
+    if (jaw_) split_the_jaw();
     if (spec_.crop) hold_the_cut();
     s.rigid_nodes = static_cast<std::int64_t>(m.rigid_nodes.size());
+    s.jaw_nodes = m.jaw ? static_cast<std::int64_t>(m.jaw->nodes.size()) : 0;
     s.sliding_nodes = static_cast<std::int64_t>(m.sliding.size());
     for (const auto& ns : spec_.node_sets) {
       const SignedField* surf = ns.select.surface ? named_surface(*ns.select.surface) : nullptr;
@@ -699,6 +704,44 @@ class Pipeline {
       s.node_sets.emplace_back(ns.name, static_cast<std::int64_t>(set.ids.size()));
       m.node_sets.push_back(std::move(set));
     }
+  }
+
+  // The jaw (rig.jaw, jaw.hpp): its geometry from the landmarks, and the voxels between the lips
+  // and along the teeth removed so that the mouth can open.
+  void cut_for_the_jaw(const formats::VoxelGrid& grid) {
+    if (!inner_) {
+      throw ConfigError(spec_.file.string(), spec_.rig->field + ".jaw",
+                        "the jaw is cut from the skull: give the spec an `inner` surface (the "
+                        "skull)");
+    }
+    jaw_ = jaw_geometry(read_landmarks(spec_.rig->landmarks));
+    const SignedField& skull = *inner_->field;
+    result_.summary.jaw_cut_voxels = drop_voxels(fractions_, grid, [&](const Vec3d& c) {
+      return near_occlusal_plane(*jaw_, c, h_) && in_jaw_cut(*jaw_, c, h_, skull(c).value);
+    });
+  }
+
+  // The mandible: the held nodes of the skull in its region (jaw.hpp) leave the rigid nodes.
+  void split_the_jaw() {
+    auto& m = result_.model;
+    formats::Jaw jaw;
+    std::vector<formats::Index> rigid;
+    for (const auto nd : m.rigid_nodes) {
+      const auto p = m.node_position(nd);
+      (in_mandible(*jaw_, {p[0], p[1], p[2]}) ? jaw.nodes : rigid).push_back(nd);
+    }
+    if (jaw.nodes.empty()) {
+      throw GeometryError(spec_.file.string(), spec_.rig->field + ".jaw",
+                          "no held node of the skull lies in the mandible's region (below the "
+                          "lips, in front of the tragi): check the landmarks and the skull, and "
+                          "that a boundary condition holds the skull (rigid, inside: true)");
+    }
+    m.rigid_nodes = std::move(rigid);
+    jaw.pivot = to_point(jaw_->pivot);
+    jaw.axis = to_point(jaw_->axis);
+    jaw.forward = to_point(jaw_->forward);
+    jaw.incisal = to_point(jaw_->incisal);
+    m.jaw = std::move(jaw);
   }
 
   // The nodes on the crop's cut are held rigid, whatever the boundary conditions bound them to.
@@ -713,6 +756,12 @@ class Pipeline {
     std::erase_if(m.sliding, [&](const formats::SlidingBinding& b) {
       return std::binary_search(cut.begin(), cut.end(), b.node);
     });
+    if (m.jaw) {
+      std::erase_if(m.jaw->nodes, [&](formats::Index nd) {
+        return std::binary_search(cut.begin(), cut.end(), nd);
+      });
+      if (m.jaw->nodes.empty()) m.jaw.reset();
+    }
   }
 
   void surfaces() {

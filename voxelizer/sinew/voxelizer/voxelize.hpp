@@ -62,6 +62,8 @@ struct Summary {
   std::int64_t rigid_nodes = 0, sliding_nodes = 0;
   std::int64_t cropped_voxels = 0;  // tissue voxels outside the crop region, dropped
   std::int64_t cut_nodes = 0;       // nodes on the crop's cut, held rigid
+  std::int64_t jaw_nodes = 0;       // the mandible's nodes (rig.jaw), apart from the rigid ones
+  std::int64_t jaw_cut_voxels = 0;  // voxels removed between the lips and along the teeth
   std::vector<std::pair<std::string, std::int64_t>> node_sets;
   std::vector<MeshReport> meshes;
   std::int64_t embedded_vertices = 0, embedding_outside = 0;

@@ -69,6 +69,12 @@ ConstraintArrays<T> make_constraint_program(const PreparedModel& p) {
     c.prescribed_mask.push_back((pd.components[0] ? 1 : 0) | (pd.components[1] ? 2 : 0) |
                                 (pd.components[2] ? 4 : 0));
   }
+  // The jaw's nodes: a capture each (u* for the work, as a prescribed entry's), then their move.
+  const std::size_t jaw_entry = c.prescribed_set.size();
+  for (auto nd : p.jaw_nodes) {
+    add(nd, kOpCapture, c.prescribed_set.size());
+    c.prescribed_set.push_back(-1);
+  }
   for (std::size_t k = 0; k < p.slide_node.size(); ++k) add(p.slide_node[k], kOpSlide, k);
   for (std::size_t k = 0; k < p.plane_nodes.size(); ++k) {
     add(p.plane_nodes[k], kOpPlane, k);
@@ -79,6 +85,8 @@ ConstraintArrays<T> make_constraint_program(const PreparedModel& p) {
     for (const auto& pd : p.prescribed)
       for (auto nd : pd.nodes) add(nd, kOpPrescribe, q++);
   }
+  for (std::size_t k = 0; k < p.jaw_nodes.size(); ++k) add(p.jaw_nodes[k], kOpJaw, jaw_entry + k);
+  if (!p.jaw_nodes.empty()) c.jaw_factor = std::int32_t(p.forces.size() + p.prescribed.size());
   for (auto nd : p.rigid) add(nd, kOpRigid, 0);
   std::stable_sort(ops.begin(), ops.end(),
                    [](const Entry& x, const Entry& y) { return x.node < y.node; });
@@ -210,7 +218,8 @@ ConstraintData<T> host_constraint_data(const EngineArrays<T>& a,
           sliding.data(a),
           a.rest.data(),
           a.gravity.empty() ? nullptr : a.gravity.data(),
-          std::int32_t(c.force_per_node.size())};
+          std::int32_t(c.force_per_node.size()),
+          c.jaw_factor};
 }
 
 template <typename T>
@@ -291,8 +300,9 @@ BackendCore::BackendCore(const formats::Model& model, const Setup& setup, Plan p
 }
 
 std::size_t BackendCore::step_scalar_count() const {
-  return std::max<std::size_t>(
-      1, muscle_count() + prepared_.forces.size() + prepared_.prescribed.size());
+  return std::max<std::size_t>(1, muscle_count() + prepared_.forces.size() +
+                                      prepared_.prescribed.size() +
+                                      (setup_.jaw ? std::size_t(physics::kJawMapSize) : 0));
 }
 
 double BackendCore::curve_activation(std::size_t m, double t) const {
@@ -389,6 +399,16 @@ void BackendCore::step_scalars(std::int64_t step, T* row) const {
   T* prescribed = force + prepared_.forces.size();
   for (std::size_t s = 0; s < prepared_.prescribed.size(); ++s)
     prescribed[s] = T(prepared_.prescribed[s].curve.at(curve_time(t + dt())));
+  if (setup_.jaw) {
+    double map[physics::kJawMapSize];
+    jaw_map(t + dt(), map);
+    T* jaw = prescribed + prepared_.prescribed.size();
+    for (int k = 0; k < physics::kJawMapSize; ++k) jaw[k] = T(map[k]);
+  }
+}
+
+void BackendCore::jaw_map(double t, double (&map)[physics::kJawMapSize]) const {
+  setup_.jaw->map(curve_time(t), map);
 }
 
 void BackendCore::set_initial_energy(const Energies& e0) {

@@ -58,6 +58,7 @@ struct ConstraintArrays {
   std::vector<Vec3<T>> prescribed_value;       // per prescribed set, m
   std::vector<std::int32_t> prescribed_mask;   // per prescribed set, bit c: component c
   std::vector<Vec3<T>> plane_normal;           // per plane entry, unit
+  std::int32_t jaw_factor = -1;                // ConstraintData::jaw_factor
 };
 
 // The typed arrays of a run in scalar T (T(x) of the prepared doubles, as both engines always did,
@@ -144,14 +145,17 @@ class BackendCore {
   double curve_time(double t) const { return t / setup_.time_scaling; }
 
   // Per-step scalars, one row per step: [activation a_m(t_n) clamped to [0, 1] (muscles) | force
-  // factors at t_n (force sets) | prescribed factors at t_n+1 (prescribed sets)]. A step of −1
-  // gives the prescribed factors at t = 0 (the initial constraints).
+  // factors at t_n (force sets) | prescribed factors at t_n+1 (prescribed sets) | the jaw's map at
+  // t_n+1 (physics::kJawMapSize, with a jaw)]. A step of −1 gives the prescribed factors and the
+  // jaw at t = 0 (the initial constraints).
   std::size_t muscle_count() const { return setup_.effects.muscles ? muscle_count_ : 0; }
   std::size_t step_scalar_count() const;
   template <typename T>
   void step_scalars(std::int64_t step, T* row) const;
   template <typename T>
   void activations(double t, T* out) const;  // muscle_count() values at time t
+  // The jaw's displacement map at simulated time t (its curves at t / time_scaling; needs a jaw).
+  void jaw_map(double t, double (&map)[physics::kJawMapSize]) const;
 
   // Steering (sinew-live, docs/live.md): changes between steps, read by step_scalars, so both
   // engines see them from their next step() call. The plan is never rebuilt.

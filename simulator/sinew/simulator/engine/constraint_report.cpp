@@ -69,6 +69,8 @@ NodeConstraints node_constraints(const PreparedModel& p, const Setup& setup,
       if (listed(setup.forces[k].nodes, node))
         out.items.push_back("loaded by " + labelled(setup.forces[k].label, "nodal force", k));
   }
+  if (setup.jaw && listed(setup.jaw->nodes, node))
+    out.items.push_back("moved with the jaw (the scene's jaw: curves)");
   for (std::size_t k = 0; k < setup.sliding_planes.size(); ++k)
     if (listed(setup.sliding_planes[k].nodes, node))
       out.items.push_back("on the plane of " +

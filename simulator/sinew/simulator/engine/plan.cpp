@@ -108,6 +108,15 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
           .at(static_cast<std::int64_t>(m));
   }
   check_nodes(setup.rigid_nodes, n_nodes, "rigid_nodes");
+  if (setup.jaw) {
+    check_nodes(setup.jaw->nodes, n_nodes, "jaw.nodes");
+    const auto& j = *setup.jaw;
+    const auto length = [](const Vec3d& v) { return std::hypot(v[0], v[1], v[2]); };
+    if (std::abs(length(j.axis) - 1) > 1e-6 || std::abs(length(j.forward) - 1) > 1e-6 ||
+        std::abs(j.axis[0] * j.forward[0] + j.axis[1] * j.forward[1] + j.axis[2] * j.forward[2]) >
+            1e-6)
+      bad("jaw", "axis and forward must be orthogonal unit vectors");
+  }
   for (const auto& p : setup.sliding_planes) {
     check_nodes(p.nodes, n_nodes, "sliding_planes.nodes");
     if (!(std::hypot(p.normal[0], p.normal[1], p.normal[2]) > 0))
@@ -386,6 +395,10 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
     plan.stages.push_back(
         {"prescribed displacements",
          fmt::format("{} sets, {} nodes", setup.prescribed.size(), prescribed_nodes)});
+  if (setup.jaw)
+    plan.stages.push_back({"jaw", fmt::format("{} nodes moved as one rigid body (opening, "
+                                              "protrusion, lateral shift from the scene's curves)",
+                                              setup.jaw->nodes.size())});
   if (!setup.rigid_nodes.empty())
     plan.stages.push_back({"rigid nodes", fmt::format("{} nodes", setup.rigid_nodes.size())});
   plan.stages.push_back(
@@ -433,6 +446,9 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
     add("load node lists", "int32", (prescribed_nodes + force_nodes) * 4);
   if (plane_nodes) add("sliding planes", "int32 node ids", plane_nodes * 4);
   if (!setup.rigid_nodes.empty()) add("rigid nodes", "int32", setup.rigid_nodes.size() * 4);
+  if (setup.jaw)
+    add("jaw nodes + their captures", fmt::format("int32 + 3 {}", tn),
+        setup.jaw->nodes.size() * (4 + 3 * t));
   return plan;
 }
 

@@ -123,6 +123,7 @@ PreparedModel prepare_model(const formats::Model& model, const Setup& setup, con
     }
   }
   p.rigid = setup.rigid_nodes;
+  if (setup.jaw) p.jaw_nodes = setup.jaw->nodes;
   if (fx.sliding && !model.sliding.empty()) {
     std::vector<std::int32_t> local(model.surfaces.size(), -1);
     for (const auto& b : model.sliding) {

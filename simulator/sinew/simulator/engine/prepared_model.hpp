@@ -57,6 +57,8 @@ struct PreparedModel {
   std::vector<Index> plane_nodes;
   std::vector<std::array<double, 3>> plane_normals;  // unit
   std::vector<Index> rigid;
+  // The jaw (Setup::jaw): its nodes; empty without one.
+  std::vector<Index> jaw_nodes;
   // Sliding (empty unless simulated): one surface per model surface in use; one entry per binding.
   std::vector<PreparedSurface> surfaces;
   std::vector<Index> slide_node;

@@ -6,16 +6,19 @@
 //
 // What the engine does with it (one step n -> n+1, docs/physics.md "Step"):
 //   element stresses/forces (+ hourglass, + muscles) -> per-node gather -> external forces
-//   -> central-difference update -> sliding surfaces -> sliding planes -> prescribed -> rigid.
+//   -> central-difference update -> sliding surfaces -> sliding planes -> prescribed -> jaw
+//   -> rigid.
 // An effect that is off allocates and computes nothing (see Plan::explain()).
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "sinew/formats/model.hpp"
 #include "sinew/simulator/engine/curve.hpp"
+#include "sinew/simulator/physics/jaw.hpp"
 
 namespace sinew::simulator {
 
@@ -87,6 +90,32 @@ struct SlidingPlane {
   std::string label{};    // how stop messages name it
 };
 
+// The jaw (the model's /jaw, physics/jaw.hpp) driven by curves: its nodes move as one rigid body,
+// x' = R(θ(t))(x − pivot) + pivot + protrusion(t) · forward + lateral(t) · axis, every step. An
+// empty curve is 0. Always honoured when present (a boundary condition, as rigid nodes).
+struct JawMotion {
+  std::vector<Index> nodes;   // sorted, unique; neither rigid, sliding nor prescribed
+  Vec3d pivot{0, 0, 0};       // m
+  Vec3d axis{1, 0, 0};        // unit, the subject's left
+  Vec3d forward{0, 0, 1};     // unit, normal to axis
+  Vec3d incisal{0, 0, 0};     // m, the incisal point at rest (the opening's report)
+  Curve opening;              // rad about +axis
+  Curve protrusion, lateral;  // m
+  std::string label{"jaw"};   // how stop messages name it
+
+  // The pose at curve time t (scene time: Setup::time_scaling already divided out).
+  physics::JawPose pose(double t) const {
+    const auto at = [t](const Curve& c) { return c.points.empty() ? 0.0 : c.at(t); };
+    return {at(opening), at(protrusion), at(lateral)};
+  }
+  // The displacement map of pose(t) (physics/jaw.hpp): u = M (x − pivot) + d of a jaw node.
+  void map(double t, double (&out)[physics::kJawMapSize]) const {
+    const double p[3] = {pivot[0], pivot[1], pivot[2]}, a[3] = {axis[0], axis[1], axis[2]},
+                 f[3] = {forward[0], forward[1], forward[2]};
+    physics::jaw_displacement_map(p, a, f, pose(t), out);
+  }
+};
+
 struct InitialVelocity {
   std::vector<Index> nodes;
   Vec3d velocity{0, 0, 0};  // m/s
@@ -128,6 +157,7 @@ struct Setup {
   bool activation_overrides = false;
   // Always honoured.
   std::vector<SlidingPlane> sliding_planes;
+  std::optional<JawMotion> jaw;
   std::vector<InitialVelocity> initial_velocities;
   // effects.sliding uses every binding in Model::sliding (no selection here).
 

@@ -9,12 +9,13 @@
 #include "sinew/common/math.hpp"
 #include "sinew/simulator/passes/sliding_lists.hpp"
 #include "sinew/simulator/physics/element.hpp"
+#include "sinew/simulator/physics/jaw.hpp"
 
 namespace sinew::simulator {
 
 // The loads and constraints of a step as one program per constrained node: op = kind << 28 | arg,
 // a node's ops in the CPU's order (nodal forces by set, capture of u*, sliding, planes in list
-// order, prescribed sets in order, rigid). Each op reads and writes only its node, so one thread
+// order, prescribed sets in order, jaw, rigid). Each op reads and writes only its node, so one thread
 // per node running its ops in that order gives the CPU's result with no race (a node in two sets,
 // or on two planes, included).
 enum ConstraintOp : std::int32_t {
@@ -24,8 +25,15 @@ enum ConstraintOp : std::int32_t {
   kOpPlane = 3,      // arg: plane entry (its unit normal)
   kOpPrescribe = 4,  // arg: prescribed entry q
   kOpRigid = 5,
+  kOpJaw = 6,  // arg: its capture entry q (as a prescribed entry's); the jaw's map in the factors
 };
 constexpr std::int32_t kOpShift = 28, kOpArg = (1 << kOpShift) - 1;
+// Whether the op is a prescribed motion whose reaction is (u − u*)/A, u* captured before the
+// node's constraints (add_program_work).
+SINEW_HD_INLINE bool op_prescribes(std::int32_t code) {
+  const std::int32_t kind = code >> kOpShift;
+  return kind == kOpPrescribe || kind == kOpJaw;
+}
 
 template <typename T>
 struct ConstraintData {
@@ -36,7 +44,7 @@ struct ConstraintData {
   const T* inverse_mass;
   physics::CentralDifference<T> cd;
   const Vec3<T>* force_per_node;        // per force set
-  const std::int32_t* prescribed_set;   // per prescribed entry
+  const std::int32_t* prescribed_set;   // per prescribed entry (−1: a jaw node's)
   const Vec3<T>* prescribed_value;      // per prescribed set
   const std::int32_t* prescribed_mask;  // per prescribed set: bit c = component c prescribed
   Vec3<T>* prescribed_free;             // per prescribed entry: u* before constraints
@@ -45,11 +53,14 @@ struct ConstraintData {
   const Vec3<T>* rest;
   const Vec3<T>* gravity;  // per node; null without gravity
   std::int32_t force_sets;
+  // Where the jaw's map (physics/jaw.hpp, kJawMapSize numbers) starts in the factors; −1: no jaw.
+  std::int32_t jaw_factor = -1;
 };
 
 // Runs ops [begin, end) of node i on v (its u(n+1) after the update) and returns the result;
 // `projected` (zero on entry) gets the sum of the sliding and plane projections' moves, for
-// add_program_work. factor: [force factors at t_n | prescribed factors at t_n+1]. With `loads` off
+// add_program_work. factor: [force factors at t_n | prescribed factors at t_n+1 | the jaw's map at
+// t_n+1]. With `loads` off
 // (the initial constraints at t = 0) nodal forces and captures are skipped.
 // kSlide: 0 the model has no sliding (the op is compiled out); 1 sliding with the list refresh
 // (and grid search) inline; 2 sliding with lists refreshed ahead by slide_refresh_kernel.
@@ -91,6 +102,9 @@ SINEW_HD_INLINE Vec3<T> run_ops(const ConstraintData<T>& d, std::int32_t i, std:
         physics::prescribe(factor[d.force_sets + set], d.prescribed_value[set], comps, v);
         break;
       }
+      case kOpJaw:
+        v = physics::jaw_displacement(factor + d.jaw_factor, d.rest[i]);
+        break;
       default:
         v = Vec3<T>{T(0), T(0), T(0)};
     }
@@ -123,7 +137,7 @@ SINEW_HD_INLINE void add_program_work(const ConstraintData<T>& d, std::int32_t i
       const double f = double(factor[arg]);
       for (int k = 0; k < 3; ++k)
         w += f * double(d.force_per_node[arg][k]) * 0.5 * (double(v[k]) - double(vp[k]));
-    } else if (kind == kOpPrescribe) {
+    } else if (op_prescribes(code)) {
       prescribed = true;
       for (int k = 0; k < 3; ++k) {
         const double fc = (double(v[k]) - double(d.prescribed_free[arg][k])) / a;

@@ -1,4 +1,5 @@
 #include "sinew/simulator/run/run_setup.hpp"
+#include "sinew/simulator/run/scene_jaw.hpp"
 
 #include <omp.h>
 
@@ -164,6 +165,10 @@ LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>&
                       p.name, p.distance));
     }
   }
+  if (setup.jaw) {
+    summary.jaw_nodes = std::int64_t(setup.jaw->nodes.size());
+    summary.jaw_max_incisal_opening = max_incisal_opening(setup, plan.dt, plan.steps);
+  }
   r.counts = count_outputs(model, plan, r.resolved);
   return r;
 }
@@ -185,6 +190,9 @@ std::string explain_run(LoadedRun& run, const RunOptions& options) {
   text += describe_outputs(run.counts);
   for (const auto& p : resolved.probes)
     text += fmt::format("  probe '{}': {}\n", p.name, p.description);
+  if (run.summary.jaw_nodes > 0)
+    text += fmt::format("  jaw: {} nodes; incisal opening up to {:.1f} mm\n", run.summary.jaw_nodes,
+                        1e3 * run.summary.jaw_max_incisal_opening);
   for (const auto& w : run.summary.warnings) text += fmt::format("  warning: {}\n", w);
   const bool element_fields =
       std::any_of(resolved.fields.begin(), resolved.fields.end(), [](auto f) {

@@ -58,6 +58,10 @@ std::string to_json(const RunSummary& s) {
   j["loop_stages_s"] = std::move(stages);
   j["time_per_step_by_stage_s"] = std::move(per_step);
   j["frame_writing_s"] = s.frame_writing_s;
+  if (s.jaw_nodes > 0) {
+    j["jaw"] = {{"nodes", s.jaw_nodes},
+                {"max_incisal_opening_mm", 1e3 * s.jaw_max_incisal_opening}};
+  }
   j["frames"] = s.frames;
   auto energies = nlohmann::ordered_json::array();
   for (const auto& e : s.energies) {

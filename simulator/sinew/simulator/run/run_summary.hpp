@@ -51,6 +51,10 @@ struct RunSummary {
   // overlapped with the steps; on the CPU inside the "frames" stage.
   double frame_writing_s = 0;
   std::int64_t frames = 0;
+  // The jaw (when the scene moves one): its nodes and the largest incisal opening its curves give
+  // (m; scene_jaw.hpp incisal_opening over the run's steps).
+  std::int64_t jaw_nodes = 0;
+  double jaw_max_incisal_opening = 0;
   std::vector<Energies> energies;  // one per frame, simulated time
   std::vector<std::string> warnings;
 };

@@ -78,63 +78,6 @@ std::array<double, 3> unit_vec3(const YamlNode& c) {
   return v;
 }
 
-void check_monotone(const YamlNode& c, const std::vector<std::array<double, 2>>& points) {
-  // Error text names the offending point; Curve::valid() is the same rule.
-  for (std::size_t i = 1; i < points.size(); ++i) {
-    if (!(points[i][0] > points[i - 1][0])) {
-      throw c.error(fmt::format("curve not monotone in t: point {} has t = {} after t = {}", i,
-                                points[i][0], points[i - 1][0]));
-    }
-  }
-}
-
-// A curve: a list of [t, value] points, or the ramp/hold/release shorthand, or a single number
-// (constant).
-SceneCurve parse_curve(const YamlNode& c) {
-  SceneCurve out;
-  out.key = c.path();
-  auto& curve = out.curve;
-  if (c.is_scalar()) {
-    curve.points.push_back({0.0, c.number()});
-    return out;
-  }
-  if (c.is_sequence()) {
-    if (c.size() == 0) throw c.error("a curve needs at least one [t, value] point");
-    for (const auto& p : c.items()) {
-      if (!p.is_sequence() || p.size() != 2) throw p.error("expected a point [t, value]");
-      curve.points.push_back({p.item(0).number(), p.item(1).number()});
-    }
-    check_monotone(c, curve.points);
-    return out;
-  }
-  c.allow_keys({"points", "start", "ramp", "hold", "release", "peak"});
-  if (c.has("points")) {
-    for (const auto* k : {"start", "ramp", "hold", "release", "peak"}) {
-      if (c.has(k))
-        throw c.child(k).error("give either 'points' or the ramp/hold/release shorthand, not both");
-    }
-    return parse_curve(c.child("points"));
-  }
-  if (!c.has("ramp"))
-    throw c.error("a curve needs 'points' or 'ramp' (with optional start, hold, release, peak)");
-  const double start = c.has("start") ? c.child("start").non_negative() : 0.0;
-  const double ramp = c.child("ramp").positive();
-  const double peak = c.has("peak") ? c.child("peak").number() : 1.0;
-  curve.points.push_back({start, 0.0});
-  curve.points.push_back({start + ramp, peak});
-  if (c.has("release")) {
-    const double hold = c.has("hold") ? c.child("hold").non_negative() : 0.0;
-    const double release = c.child("release").positive();
-    if (hold > 0) curve.points.push_back({start + ramp + hold, peak});
-    curve.points.push_back({start + ramp + hold + release, 0.0});
-  } else if (c.has("hold")) {
-    throw c.child("hold").error(
-        "'hold' needs 'release' (without release the peak is held to the end)");
-  }
-  if (start > 0) curve.points.insert(curve.points.begin(), {0.0, 0.0});
-  return out;
-}
-
 std::array<bool, 3> parse_components(const YamlNode& c) {
   std::array<bool, 3> out{false, false, false};
   const auto one = [&](const YamlNode& s) {
@@ -374,7 +317,7 @@ Scene parse_scene_text(const std::string& text, const std::string& file,
     throw ConfigError(file, "", "a scene is a mapping of keys (model:, effects:, duration:, ...)");
   c.allow_keys({"title", "units", "model", "effects", "duration", "time_step", "damping",
                 "mass_scaling", "time_scaling", "hourglass", "precision", "gravity", "muscles",
-                "node_sets", "boundary_conditions", "initial_velocity", "output", "probes"});
+                "node_sets", "boundary_conditions", "initial_velocity", "output", "probes", "jaw"});
 
   if (c.has("title")) scene.title = c.child("title").text();
   if (c.has("units")) {
@@ -476,6 +419,7 @@ Scene parse_scene_text(const std::string& text, const std::string& file,
   if (c.has("initial_velocity")) parse_initial_velocity(c.child("initial_velocity"), scene);
   if (c.has("output")) parse_output(c.child("output"), scene);
   if (c.has("probes")) parse_probes(c.child("probes"), scene);
+  if (c.has("jaw")) scene.jaw = parse_scene_jaw(c.child("jaw"));
   return scene;
 }
 
@@ -753,6 +697,7 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
   std::sort(rigid.begin(), rigid.end());
   rigid.erase(std::unique(rigid.begin(), rigid.end()), rigid.end());
   s.rigid_nodes = std::move(rigid);
+  resolve_scene_jaw(scene.jaw, scene.file, model, s);
 
   for (const auto& v : scene.initial_velocity) {
     s.initial_velocities.push_back(

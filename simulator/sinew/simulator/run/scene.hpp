@@ -20,6 +20,8 @@
 #include "sinew/simulator/engine/curve.hpp"
 #include "sinew/simulator/engine/setup.hpp"
 #include "sinew/simulator/output/probes.hpp"
+#include "sinew/simulator/run/scene_curve.hpp"
+#include "sinew/simulator/run/scene_jaw.hpp"
 
 namespace sinew::simulator {
 
@@ -30,13 +32,6 @@ inline constexpr std::array<Effect, 7> kAllEffects = {
     Effect::elasticity, Effect::hourglass, Effect::damping, Effect::gravity,
     Effect::muscles,    Effect::sliding,   Effect::loads};
 const char* to_string(Effect effect);
-
-// A piecewise-linear curve (curve.hpp) as written in the scene, after shorthand expansion, with
-// its key path for messages. t strictly increasing, at least one point.
-struct SceneCurve {
-  Curve curve;
-  std::string key;
-};
 
 struct SceneTimeStep {
   bool automatic = true;
@@ -140,6 +135,7 @@ struct Scene {
   std::vector<SceneInitialVelocity> initial_velocity;
   SceneOutput output;
   std::vector<SceneProbe> probes;
+  std::optional<SceneJaw> jaw;
 
   bool has(Effect e) const;
 };

@@ -266,7 +266,8 @@ class CudaEngine final : public Backend, public CudaTiming {
             slide_data(),
             rest_.get(),
             core_.setup().effects.gravity ? gravity_.get() : nullptr,
-            std::int32_t(core_.prepared().forces.size())};
+            std::int32_t(core_.prepared().forces.size()),
+            arrays_.constraints.jaw_factor};
   }
   StepSums step_sums() const {
     return {work_ ? work_acc_.get() : nullptr,
