@@ -5,6 +5,7 @@
 #include <hdf5.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -475,11 +476,60 @@ TEST(Runner, HourglassDominatedRunIsFlagged) {
     for (const auto& w : r.summary.warnings)
       warned = warned || w.find("hourglass energy is") != std::string::npos;
     double worst = 0;
-    for (const auto& e : r.summary.energies)
-      if (e.strain > 0) worst = std::max(worst, e.hourglass / e.strain);
+    for (const auto& e : r.summary.energies) {
+      EXPECT_EQ(e.elastic, e.strain);  // no muscles: the same sum
+      if (e.elastic > 0) worst = std::max(worst, e.hourglass / e.elastic);
+    }
     EXPECT_EQ(warned, worst > kHourglassWarningShare) << squash << ": worst share " << worst;
     EXPECT_EQ(warned, squash > 0.5) << squash << ": worst share " << worst;
     RecordProperty(fmt::format("worst_share_{}", squash), fmt::format("{:.3f}", worst));
+  }
+}
+
+// A contracting muscle (the block's flexor along x, fixed at x_min) reports a negative strain
+// energy: its active potential outweighs what the tissue stores. The hourglass check measures the
+// hourglass energy against the stored (elastic) energy, so it is made in such a run too (it was
+// skipped while the strain energy was negative, issue 34): with the hourglass stiffness raised to
+// κ = 10, the fixed face's bilinear shear (an hourglass shape) holds 25% of it and the run warns at
+// a frame whose strain energy is negative; with the default κ = 0.075 it is 2.4% and the run does
+// not warn. The warning fires exactly where hourglass_dominated says.
+TEST(Runner, HourglassCheckIsMadeInAContractingMuscleRun) {
+  for (const double kappa : {0.075, 10.0}) {
+    TempDir dir("hourglass_muscle");
+    write_model(dir);
+    write_file(dir / "scene.yaml",
+               fmt::format("model: block.h5\neffects: [elasticity, hourglass, damping, muscles]\n"
+                           "duration: 0.2\ndamping: 20\nhourglass: {{kappa: {}}}\nmuscles:\n"
+                           "  flexor: {{ramp: 0.05, peak: 1}}\nboundary_conditions:\n"
+                           "  - {{type: fixed, set: x_min}}\noutput: {{interval: 0.02}}\n",
+                           kappa));
+    const auto r = run_scene(options_for(dir / "scene.yaml", dir / "out"));
+    ASSERT_EQ(r.summary.status, "completed") << kappa;
+    std::string warning;
+    for (const auto& w : r.summary.warnings)
+      if (w.find("hourglass energy is") != std::string::npos) warning = w;
+    const Energies* first = nullptr;
+    int contracting = 0;
+    double worst = 0;
+    for (const auto& e : r.summary.energies) {
+      EXPECT_GE(e.elastic, 0.0);
+      if (e.strain < 0 && e.elastic > 0) ++contracting;
+      if (e.elastic > 0) worst = std::max(worst, e.hourglass / e.elastic);
+      if (!first && hourglass_dominated(e)) first = &e;
+    }
+    EXPECT_GT(contracting, 3) << kappa;  // the old check (strain > 0) skipped these frames
+    EXPECT_EQ(!warning.empty(), first != nullptr) << kappa << ": worst share " << worst;
+    EXPECT_EQ(!warning.empty(), kappa > 1) << kappa << ": worst share " << worst;
+    if (first) {
+      EXPECT_LT(first->strain, 0.0) << warning;
+      EXPECT_NE(warning.find(fmt::format("(step {})", first->step)), std::string::npos) << warning;
+      EXPECT_NE(warning.find("of the elastic energy"), std::string::npos) << warning;
+    }
+    RecordProperty(fmt::format("worst_share_{}", kappa), fmt::format("{:.3f}", worst));
+    std::printf(
+        "[ measured ] contracting muscle, hourglass kappa %g: worst hourglass / elastic "
+        "%.3f, %d of %zu frames with strain < 0 < elastic\n",
+        kappa, worst, contracting, r.summary.energies.size());
   }
 }
 

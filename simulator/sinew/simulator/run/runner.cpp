@@ -66,11 +66,11 @@ class StageClock {
 
 std::string hourglass_warning(const Energies& e) {
   return fmt::format(
-      "hourglass energy is {:.0f}% of the strain energy at t = {:.6g} s (step {}): above {:.0f}% "
+      "hourglass energy is {:.0f}% of the elastic energy at t = {:.6g} s (step {}): above {:.0f}% "
       "the mesh may be folding in hourglass modes that no Jacobian check sees; refine the model, "
       "raise hourglass.kappa, or use hourglass.modulus p_wave where bending does not matter "
       "(docs/stability.md)",
-      100.0 * e.hourglass / e.strain, e.time, e.step, 100.0 * kHourglassWarningShare);
+      100.0 * e.hourglass / e.elastic, e.time, e.step, 100.0 * kHourglassWarningShare);
 }
 
 double unix_seconds() {
@@ -200,7 +200,9 @@ RunResult run_scene(const RunOptions& options) {
     summary.energies.push_back(e);
     // One-point elements can fold into hourglass modes that the centre Jacobian does not see
     // (docs/stability.md); explicit codes (LS-DYNA, Abaqus) flag this share of the internal energy.
-    if (!hourglass_warned && e.hourglass > kHourglassWarningShare * e.strain && e.strain > 0) {
+    // Measured against the elastic energy (stored in the material), not the strain energy, whose
+    // active muscle term is negative in a contracting muscle (docs/physics.md §8).
+    if (!hourglass_warned && hourglass_dominated(e)) {
       hourglass_warned = true;
       summary.warnings.push_back(hourglass_warning(e));
       log::warn("{}", summary.warnings.back());

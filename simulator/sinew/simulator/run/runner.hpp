@@ -13,11 +13,18 @@
 namespace sinew::simulator {
 
 // The hourglass warning: at an output frame where the hourglass energy exceeds this share of the
-// strain energy, the run logs one warning and lists it in run_summary.json's `warnings` (the
-// usual 10% rule of explicit codes such as LS-DYNA). One-point elements can then be folded into
-// hourglass patterns that no Jacobian check sees (docs/stability.md): refine, raise
-// hourglass.kappa, or use modulus p_wave where bending does not matter.
+// elastic energy (Energies::elastic: neo-Hookean + passive muscle, the energy stored in the
+// material), the run logs one warning and lists it in run_summary.json's `warnings` (the usual 10%
+// rule of explicit codes such as LS-DYNA). One-point elements can then be folded into hourglass
+// patterns that no Jacobian check sees (docs/stability.md): refine, raise hourglass.kappa, or use
+// modulus p_wave where bending does not matter. The strain energy is no yardstick in a muscle run:
+// its active term is negative while a muscle contracts (docs/physics.md §8).
 inline constexpr double kHourglassWarningShare = 0.10;
+
+// Whether the energies of a frame call for the hourglass warning.
+inline bool hourglass_dominated(const Energies& e) {
+  return e.elastic > 0 && e.hourglass > kHourglassWarningShare * e.elastic;
+}
 
 // Runs (or explains) a scene. Throws ConfigError / FormatError / IoError / ResourceError before
 // the loop starts. An instability during the loop is written to the summary (status "unstable")
