@@ -493,8 +493,8 @@ TEST(Runner, HourglassRuleJudgesTheElasticEnergyAboveAFloor) {
 
 // Compression to 30% of height with the default `shear` hourglass modulus folds the one-point
 // elements into hourglass patterns that keep every centre J > 0 (docs/stability.md, limit 2): the
-// run must say so (hourglass energy over 10% of the strain energy), while a mild compression must
-// not warn.
+// run must say so (hourglass energy over 10% of the elastic energy, here the strain energy), while
+// a mild compression must not warn.
 TEST(Runner, HourglassDominatedRunIsFlagged) {
   for (const double squash : {0.1, 0.75}) {
     TempDir dir("hourglass_warning");
