@@ -371,13 +371,13 @@ void PartitionedCpuEngine<T>::element_list(const std::vector<Index>& list) {
   simulator::for_each_chunk<T>(
       list.size(), threads_,
       [&](std::size_t, std::size_t begin, std::size_t end) {
-        double strain = 0, hourglass = 0;  // kEnergy off: untouched
+        double strain = 0, elastic = 0, hourglass = 0;  // kEnergy off: untouched
         for (std::size_t i = begin; i < end; ++i) {
           const std::int32_t e = list[i];
           const auto s = simulator::element_start<T, kMuscle>(d, e, activation_.data());
           Vec3<T> fe[8];
           const T j = simulator::element_finish<T, kElastic, kMuscle, kHourglass, false>(
-              d, s, u_.data(), fe, strain, hourglass);
+              d, s, u_.data(), fe, strain, elastic, hourglass);
           jacobian_[std::size_t(e)] = double(j);
           Vec3<T>* out = &elem_force_[std::size_t(e) * 8];
           for (int a = 0; a < 8; ++a) out[a] = fe[a];
@@ -556,7 +556,8 @@ Energies PartitionedCpuEngine<T>::energies_at(const std::vector<Vec3<T>>& u,
     for (std::size_t c = 0; c < simulator::chunk_count(collections[k].elements.size()); ++c)
       chunks.emplace_back(k, c);
   const std::size_t per = (chunks.size() + std::size_t(size_) - 1) / std::size_t(size_);
-  std::vector<double> mine(2 * per, 0.0), all(2 * per * std::size_t(size_), 0.0);
+  // Three sums per chunk: strain, elastic, hourglass.
+  std::vector<double> mine(3 * per, 0.0), all(3 * per * std::size_t(size_), 0.0);
   const simulator::ElementData<T> d = a_.element_data();
   const auto& fx = core_.setup().effects;
   for (std::size_t j = 0; j < per; ++j) {
@@ -565,7 +566,7 @@ Energies PartitionedCpuEngine<T>::energies_at(const std::vector<Vec3<T>>& u,
     const auto& list = collections[chunks[g].first].elements;
     const std::size_t begin = chunks[g].second * kChunk,
                       end = std::min(list.size(), begin + kChunk);
-    double strain = 0, hourglass = 0;
+    double strain = 0, elastic_energy = 0, hourglass = 0;
     simulator::dispatch_flags(
         [&](auto elastic, auto muscle, auto hg) {
           constexpr bool kMuscle = decltype(muscle)::value;
@@ -574,27 +575,30 @@ Energies PartitionedCpuEngine<T>::energies_at(const std::vector<Vec3<T>>& u,
             const auto s = simulator::element_start<T, kMuscle>(d, list[i], activation_.data());
             Vec3<T> fe[8];
             simulator::element_finish<T, decltype(elastic)::value, kMuscle, decltype(hg)::value,
-                                      true>(d, s, u.data(), fe, strain, hourglass);
+                                      true>(d, s, u.data(), fe, strain, elastic_energy, hourglass);
           }
         },
         fx.elasticity, collections[chunks[g].first].muscle, fx.hourglass);
-    mine[2 * j] = strain;
-    mine[2 * j + 1] = hourglass;
+    mine[3 * j] = strain;
+    mine[3 * j + 1] = elastic_energy;
+    mine[3 * j + 2] = hourglass;
   }
   check_mpi(MPI_Allgather(mine.data(), int(mine.size()), MPI_DOUBLE, all.data(), int(mine.size()),
                           MPI_DOUBLE, comm_),
             "MPI_Allgather (energy chunks)");
   // Added as the CPU engine adds them: chunks in order within a collection, then collections.
-  double strain = 0, hourglass = 0;
+  double strain = 0, elastic = 0, hourglass = 0;
   std::size_t g = 0;
   for (std::size_t k = 0; k < collections.size(); ++k) {
-    double cs = 0, ch = 0;
+    double cs = 0, ce = 0, ch = 0;
     for (std::size_t c = 0; c < simulator::chunk_count(collections[k].elements.size()); ++c, ++g) {
-      const std::size_t at = 2 * ((g % std::size_t(size_)) * per + g / std::size_t(size_));
+      const std::size_t at = 3 * ((g % std::size_t(size_)) * per + g / std::size_t(size_));
       cs += all[at];
-      ch += all[at + 1];
+      ce += all[at + 1];
+      ch += all[at + 2];
     }
     strain += cs;
+    elastic += ce;
     hourglass += ch;
   }
   Energies e;
@@ -602,6 +606,7 @@ Energies PartitionedCpuEngine<T>::energies_at(const std::vector<Vec3<T>>& u,
   e.time = time();
   e.kinetic = core_.kinetic_energy(u.data(), up.data(), a_.inverse_mass.data(), threads_);
   e.strain = strain;
+  e.elastic = elastic;
   e.hourglass = hourglass;
   e.external_work = external_work_;
   return e;

@@ -22,7 +22,8 @@ namespace {
 constexpr NameTable<Figure::Reduce, 3> kStatistics{{{"max", Figure::Reduce::max},
                                                     {"min", Figure::Reduce::min},
                                                     {"max_abs", Figure::Reduce::max_abs}}};
-const std::vector<std::string> kEnergies{"kinetic", "strain", "hourglass", "external_work"};
+const std::vector<std::string> kEnergies{"kinetic", "strain", "elastic", "hourglass",
+                                         "external_work"};
 const std::vector<std::string> kProbeColumns{"ux", "uy", "uz", "fx", "fy", "fz"};
 
 std::string join(const std::vector<std::string>& v) {

@@ -393,10 +393,25 @@ TEST_P(IsometricMuscle, EndForceIsReferenceStressTimesCurvesTimesArea) {
   const auto u = b->displacements();
   const auto mid = nodes_at(model, 0, 1);
   EXPECT_NEAR(node_u(u, mid[0])[0] / kH, c.stretch - 1, 1e-4);
+  // Energies of the homogeneous fibres (volume l · a0, no matrix): the elastic energy is what the
+  // tissue stores, the passive fibre energy σref V ∫_1^λ fp; the strain energy adds the active
+  // potential σref V a ∫_1^λ fa, negative while the fibres are shorter than λopt = 1.
+  const Energies e = b->energies();
+  const double scale = 5e6 * l * a0;  // σref V, J
+  const double passive = scale * physics::passive_fibre_integral(x, c.p1, 6.6, 1.4);
+  const double active = scale * c.activation * physics::blemker_active_integral(x);
+  EXPECT_NEAR(e.elastic, passive, 5e-3 * std::abs(passive) + 1e-12 * scale);
+  EXPECT_NEAR(e.strain - e.elastic, active, 5e-3 * std::abs(active) + 1e-12 * scale);
+  EXPECT_GE(e.elastic, 0.0);
+  if (c.stretch < 1 && c.activation > 0) {
+    EXPECT_LT(e.strain, 0.0);
+  }
   std::printf(
       "[ measured ] isometric muscle λ0 = %.2f, a = %.2f, P1 = %.2f: end force %.6g N "
-      "(expected %.6g N), rel. error %.2g\n",
-      c.stretch, c.activation, c.p1, force, expected, rel(force, expected));
+      "(expected %.6g N), rel. error %.2g; elastic %.6g J (expected %.6g J), strain %.6g J "
+      "(expected %.6g J)\n",
+      c.stretch, c.activation, c.p1, force, expected, rel(force, expected), e.elastic, passive,
+      e.strain, passive + active);
 }
 
 // ---- gravity -----------------------------------------------------------------------------------

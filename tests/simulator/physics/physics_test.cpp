@@ -6,6 +6,7 @@
 
 #include "sinew/common/math.hpp"
 #include "sinew/simulator/physics/central_difference.hpp"
+#include "sinew/simulator/physics/element.hpp"
 #include "sinew/simulator/physics/hex8.hpp"
 #include "sinew/simulator/physics/hourglass.hpp"
 #include "sinew/simulator/physics/muscle.hpp"
@@ -241,6 +242,62 @@ TEST(Muscle, CurvesAreContinuousAndIntegralsMatchQuadrature) {
     sp *= hstep / 3;
     EXPECT_NEAR(blemker_active_integral(x), sa, 1e-6) << x;
     EXPECT_NEAR(passive_fibre_integral(x, p1, p2, xs), sp, 1e-6) << x;
+  }
+}
+
+// The element's energies (physics::element_forces, what every backend sums): the elastic energy is
+// the energy stored in the material, V0 (W_nH + Σ passive muscle); the strain energy adds the active
+// muscle potential at the current activation, which is negative in a shortened, active fibre, so a
+// contracting muscle's element can have strain < 0 < elastic. Against the separate laws.
+TEST(ElementEnergies, ElasticIsTheStoredPartAndStrainAddsTheActivePotential) {
+  const double h = 1e-3, v0 = h * h * h;
+  const ElementRow<double> row{300.0, 300.0 * 2 * 1.49 / (3 * 0.02), 5.0};
+  const MuscleParams<double> params[2] = {{5e4, 1.0, 0.05, 6.6, 1.4}, {2e4, 1.1, 0.1, 5.0, 1.5}};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> small(-0.01, 0.01);
+  for (const double stretch : {0.85, 1.0, 1.25}) {
+    for (const double activation : {0.0, 0.7}) {
+      const V fibres[2] = {(1 / norm(V{1, 0.1, 0})) * V{1, 0.1, 0}, V{1, 0, 0}};
+      const std::int32_t ids[2] = {0, 1};
+      const double fractions[2] = {0.6, 0.3};
+      const double activations[2] = {activation, 0.5 * activation};
+      const MuscleEntries<double> muscles{ids, fractions, fibres, params, activations, 0, 2};
+      V x[8], u[8];
+      cube_nodes(h, x);
+      for (int a = 0; a < 8; ++a)
+        u[a] = V{x[a].x * (stretch - 1) + small(rng) * h, small(rng) * h, small(rng) * h};
+      V fe[8];
+      const auto out = element_forces<double, true, true, true, true>(u, h, row, muscles, fe);
+      // Independently: the laws one by one.
+      const Mat3d f = hex8_deformation_gradient(u, h);
+      const double j = determinant(f);
+      const SymMat3<double> cg = transpose_product(f);
+      double stored = v0 * neo_hookean_energy(cg, j, row.mu, row.kappa), active = 0;
+      for (int k = 0; k < 2; ++k) {
+        stored += v0 * muscle_passive_energy(cg, fibres[k], fractions[k], params[k]);
+        active += v0 * muscle_active_energy(cg, fibres[k], fractions[k], activations[k], params[k]);
+        // The two parts are the whole muscle energy.
+        EXPECT_NEAR(
+            muscle_passive_energy(cg, fibres[k], fractions[k], params[k]) +
+                muscle_active_energy(cg, fibres[k], fractions[k], activations[k], params[k]),
+            muscle_energy(cg, fibres[k], fractions[k], activations[k], params[k]),
+            1e-12 * params[k].reference_stress);
+      }
+      V dummy[8] = {};
+      const double hourglass = add_hourglass_forces(u, row.hourglass_k, dummy, true);
+      const double tol = 1e-12 * 5e4 * v0;
+      EXPECT_NEAR(out.elastic, stored, tol) << stretch << " " << activation;
+      EXPECT_NEAR(out.strain, stored + active, tol) << stretch << " " << activation;
+      EXPECT_NEAR(out.hourglass, hourglass, 1e-12 * std::abs(hourglass) + 1e-30);
+      EXPECT_GE(out.elastic, 0.0);
+      if (activation == 0) {
+        EXPECT_EQ(out.strain, out.elastic) << stretch;
+      }
+      if (stretch < 1 && activation > 0) {
+        EXPECT_LT(out.strain, 0.0) << "a contracting muscle's potential outweighs its storage";
+        EXPECT_GT(out.elastic, 0.0);
+      }
+    }
   }
 }
 

@@ -5,6 +5,7 @@
 #include <hdf5.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -453,10 +454,47 @@ TEST(Runner, TimeScalingKeepsOutputsInSceneTime) {
   EXPECT_EQ(r.summary.energies.back().time, t.back());
 }
 
+// The largest hourglass share of a run's frames as runner.hpp defines it, written out here: the
+// hourglass energy over the elastic energy, the latter at least 10% of the run's largest.
+double worst_hourglass_share(const std::vector<Energies>& energies) {
+  double peak = 0, worst = 0;
+  for (const auto& e : energies) peak = std::max(peak, e.elastic);
+  for (const auto& e : energies)
+    if (peak > 0) worst = std::max(worst, e.hourglass / std::max(e.elastic, 0.1 * peak));
+  return worst;
+}
+
+// The rule on made-up frames: the onset of a load (both energies tiny, their ratio large) is not
+// judged; a frame whose strain energy is negative (a contracting muscle) is; frames without a
+// finite elastic energy (a summary written before it was reported) are skipped.
+TEST(Runner, HourglassRuleJudgesTheElasticEnergyAboveAFloor) {
+  const auto frame = [](double strain, double elastic, double hourglass) {
+    Energies e;
+    e.strain = strain;
+    e.elastic = elastic;
+    e.hourglass = hourglass;
+    return e;
+  };
+  // Onset: 50% of an elastic energy that is 0.1% of the run's largest; then 8% at most.
+  std::vector<Energies> run{frame(0, 0, 0), frame(-0.002, 0.001, 0.0005), frame(-2, 1, 0.08),
+                            frame(-1.5, 0.8, 0.06), frame(0.3, 0.3, 0.02)};
+  EXPECT_EQ(first_hourglass_dominated(run), run.size());
+  EXPECT_LT(worst_hourglass_share(run), kHourglassWarningShare);
+  // 12% of the elastic energy while the strain energy is negative: found, and not before.
+  run.push_back(frame(-0.5, 0.5, 0.06));
+  EXPECT_EQ(first_hourglass_dominated(run), run.size() - 1);
+  // Past the onset the floor (10% of the largest, 0.1 J) counts: 0.011 J is 11% of it.
+  run.insert(run.begin() + 2, frame(-0.02, 0.01, 0.011));
+  EXPECT_EQ(first_hourglass_dominated(run), 2u);
+  // A frame without an elastic energy is skipped, whatever its strain energy says.
+  std::vector<Energies> old{frame(1, std::nan(""), 0.5), frame(1, 1, 0.01)};
+  EXPECT_EQ(first_hourglass_dominated(old), old.size());
+}
+
 // Compression to 30% of height with the default `shear` hourglass modulus folds the one-point
 // elements into hourglass patterns that keep every centre J > 0 (docs/stability.md, limit 2): the
-// run must say so (hourglass energy over 10% of the strain energy), while a mild compression must
-// not warn.
+// run must say so (hourglass energy over 10% of the elastic energy, here the strain energy), while
+// a mild compression must not warn.
 TEST(Runner, HourglassDominatedRunIsFlagged) {
   for (const double squash : {0.1, 0.75}) {
     TempDir dir("hourglass_warning");
@@ -474,12 +512,58 @@ TEST(Runner, HourglassDominatedRunIsFlagged) {
     bool warned = false;
     for (const auto& w : r.summary.warnings)
       warned = warned || w.find("hourglass energy is") != std::string::npos;
-    double worst = 0;
-    for (const auto& e : r.summary.energies)
-      if (e.strain > 0) worst = std::max(worst, e.hourglass / e.strain);
+    for (const auto& e : r.summary.energies) EXPECT_EQ(e.elastic, e.strain);  // no muscles
+    const double worst = worst_hourglass_share(r.summary.energies);
     EXPECT_EQ(warned, worst > kHourglassWarningShare) << squash << ": worst share " << worst;
     EXPECT_EQ(warned, squash > 0.5) << squash << ": worst share " << worst;
     RecordProperty(fmt::format("worst_share_{}", squash), fmt::format("{:.3f}", worst));
+  }
+}
+
+// A contracting muscle (the block's flexor along x, fixed at x_min) reports a negative strain
+// energy: its active potential outweighs what the tissue stores. The hourglass check measures the
+// hourglass energy against the stored (elastic) energy, so it is made in such a run too (it was
+// skipped while the strain energy was negative, issue 34): with the hourglass stiffness raised to
+// κ = 10, the fixed face's bilinear shear (an hourglass shape) holds 25% of it and the run warns at
+// a frame whose strain energy is negative; with the default κ = 0.075 it is 2.4% and the run does
+// not warn. The warning names the frame first_hourglass_dominated finds.
+TEST(Runner, HourglassCheckIsMadeInAContractingMuscleRun) {
+  for (const double kappa : {0.075, 10.0}) {
+    TempDir dir("hourglass_muscle");
+    write_model(dir);
+    write_file(dir / "scene.yaml",
+               fmt::format("model: block.h5\neffects: [elasticity, hourglass, damping, muscles]\n"
+                           "duration: 0.2\ndamping: 20\nhourglass: {{kappa: {}}}\nmuscles:\n"
+                           "  flexor: {{ramp: 0.05, peak: 1}}\nboundary_conditions:\n"
+                           "  - {{type: fixed, set: x_min}}\noutput: {{interval: 0.02}}\n",
+                           kappa));
+    const auto r = run_scene(options_for(dir / "scene.yaml", dir / "out"));
+    ASSERT_EQ(r.summary.status, "completed") << kappa;
+    std::string warning;
+    for (const auto& w : r.summary.warnings)
+      if (w.find("hourglass energy is") != std::string::npos) warning = w;
+    int contracting = 0;
+    for (const auto& e : r.summary.energies) {
+      EXPECT_GE(e.elastic, 0.0);
+      if (e.strain < 0 && e.elastic > 0) ++contracting;
+    }
+    const double worst = worst_hourglass_share(r.summary.energies);
+    const std::size_t k = first_hourglass_dominated(r.summary.energies);
+    const Energies* first = k < r.summary.energies.size() ? &r.summary.energies[k] : nullptr;
+    EXPECT_EQ(first != nullptr, worst > kHourglassWarningShare) << kappa << ": " << worst;
+    EXPECT_GT(contracting, 3) << kappa;  // the old check (strain > 0) skipped these frames
+    EXPECT_EQ(!warning.empty(), first != nullptr) << kappa << ": worst share " << worst;
+    EXPECT_EQ(!warning.empty(), kappa > 1) << kappa << ": worst share " << worst;
+    if (first) {
+      EXPECT_LT(first->strain, 0.0) << warning;
+      EXPECT_NE(warning.find(fmt::format("(step {})", first->step)), std::string::npos) << warning;
+      EXPECT_NE(warning.find("of the elastic energy"), std::string::npos) << warning;
+    }
+    RecordProperty(fmt::format("worst_share_{}", kappa), fmt::format("{:.3f}", worst));
+    std::printf(
+        "[ measured ] contracting muscle, hourglass kappa %g: worst hourglass / elastic "
+        "%.3f, %d of %zu frames with strain < 0 < elastic\n",
+        kappa, worst, contracting, r.summary.energies.size());
   }
 }
 

@@ -34,6 +34,8 @@ struct Energies {
   double time = 0;           // s
   double kinetic = 0;        // J, ½ Σ m |v|², v = (u(n) − u(n−1))/Δt
   double strain = 0;         // J, Σ_e V0 W_e (neo-Hookean + passive muscle + active at current a)
+  double elastic = 0;        // J, the same without the active muscle term: the energy stored in
+                             // the material (neo-Hookean + passive muscle, ≥ 0)
   double hourglass = 0;      // J, Σ_e ½ k Σ q²
   double external_work = 0;  // J, work of nodal forces, gravity and prescribed displacements
 };

@@ -23,7 +23,7 @@ namespace {
 struct ElementCheck {
   double min_j = std::numeric_limits<double>::infinity();
   Index element = -1;
-  double strain = 0, hourglass = 0;
+  double strain = 0, elastic = 0, hourglass = 0;
   void track(double j, Index e) {
     if (element < 0 || (!std::isnan(min_j) && (std::isnan(j) || j < min_j))) {
       min_j = j;
@@ -37,6 +37,7 @@ struct ElementCheck {
       element = o.element;
     }
     strain += o.strain;
+    elastic += o.elastic;
     hourglass += o.hourglass;
   }
 };
@@ -186,7 +187,7 @@ ElementCheck CpuEngine<T>::element_pass(const std::vector<Index>& elements) {
           const ElementStart<T> s = element_start<T, kMuscle>(d, e, activation_.data());
           Vec3<T> fe[8];
           const T j = element_finish<T, kElastic, kMuscle, kHourglass, kEnergy>(
-              d, s, u_.data(), fe, check.strain, check.hourglass);
+              d, s, u_.data(), fe, check.strain, check.elastic, check.hourglass);
           check.track(double(j), e);
           Vec3<T>* out = &elem_force_[std::size_t(e) * 8];
           for (int a = 0; a < 8; ++a) out[a] = fe[a];
@@ -310,6 +311,7 @@ Energies CpuEngine<T>::energies() {
   e.time = time();
   e.kinetic = core_.kinetic_energy(u_.data(), up_.data(), a_.inverse_mass.data(), threads_);
   e.strain = last_check_.strain;
+  e.elastic = last_check_.elastic;
   e.hourglass = last_check_.hourglass;
   e.external_work = external_work_;
   return e;

@@ -18,11 +18,12 @@ inline std::size_t chunk_count(std::size_t n) {
   return (n + kChunk - 1) / kChunk;
 }
 
-// Chunk c of a list of items, summed in list order: the per-item pairs (value[2 · i], value[2 · i
-// + 1]) of items list[k] for k in [c · kChunk, min(size, (c + 1) · kChunk)), into sum[2 · c] and
-// sum[2 · c + 1]. Additions only, in the host's order: a device running it gives the host's bits
-// (the CUDA engine's strain and hourglass energies: only the chunk sums leave the device).
-struct ChunkPairSumBody {
+// Chunk c of a list of items, summed in list order: the kWidth values value[kWidth · i + v] of
+// items i = list[k] for k in [c · kChunk, min(size, (c + 1) · kChunk)), into sum[kWidth · c + v].
+// Additions only, in the host's order: a device running it gives the host's bits (the CUDA
+// engine's strain, elastic and hourglass energies: only the chunk sums leave the device).
+template <int kWidth>
+struct ChunkSumBody {
   const std::int32_t* list;
   std::int32_t size;
   const double* value;
@@ -31,13 +32,10 @@ struct ChunkPairSumBody {
     const std::int32_t begin = c * std::int32_t(kChunk);
     const std::int32_t end =
         begin + std::int32_t(kChunk) < size ? begin + std::int32_t(kChunk) : size;
-    double a = 0, b = 0;
-    for (std::int32_t k = begin; k < end; ++k) {
-      a += value[2 * std::size_t(list[k])];
-      b += value[2 * std::size_t(list[k]) + 1];
-    }
-    sum[2 * std::size_t(c)] = a;
-    sum[2 * std::size_t(c) + 1] = b;
+    double a[kWidth] = {};
+    for (std::int32_t k = begin; k < end; ++k)
+      for (int v = 0; v < kWidth; ++v) a[v] += value[kWidth * std::size_t(list[k]) + v];
+    for (int v = 0; v < kWidth; ++v) sum[kWidth * std::size_t(c) + v] = a[v];
   }
 };
 

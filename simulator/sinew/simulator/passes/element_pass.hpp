@@ -6,8 +6,8 @@
 // One element e: its node ids, parameter row and muscle entries (element_start: what the pass reads
 // before the displacements, so a GPU kernel can issue these loads before it waits on the kernel
 // that writes u), then u of its 8 nodes and physics::element_forces (element_finish): the nodal
-// forces fe (N), J = det F and, with kEnergy, the strain and hourglass energies added to the
-// caller's accumulators (J, double).
+// forces fe (N), J = det F and, with kEnergy, the strain, elastic and hourglass energies added to
+// the caller's accumulators (J, double).
 #include <array>
 #include <cstdint>
 
@@ -63,19 +63,19 @@ SINEW_HD_INLINE ElementStart<T> element_start(const ElementData<T>& d, std::int3
   return s;
 }
 
-// fe: the element's nodal forces at u (N × 3 per corner); returns J. strain, hourglass: running
-// sums the element's energies are added to, term by term (kEnergy).
+// fe: the element's nodal forces at u (N × 3 per corner); returns J. strain, elastic, hourglass:
+// running sums the element's energies are added to, term by term (kEnergy).
 template <typename T, bool kElastic, bool kMuscle, bool kHourglass, bool kEnergy>
 SINEW_HD_INLINE T element_finish(const ElementData<T>& d, const ElementStart<T>& s,
                                  const Vec3<T>* u, Vec3<T> (&fe)[8], double& strain,
-                                 double& hourglass) {
+                                 double& elastic, double& hourglass) {
   Vec3<T> ue[8];
 #if defined(__CUDA_ARCH__)
 #pragma unroll
 #endif
   for (int a = 0; a < 8; ++a) ue[a] = u[s.ids[a]];
   return physics::element_forces<T, kElastic, kMuscle, kHourglass, kEnergy>(
-      ue, d.h, s.row, s.muscles, fe, strain, hourglass);
+      ue, d.h, s.row, s.muscles, fe, strain, elastic, hourglass);
 }
 
 }  // namespace sinew::simulator

@@ -9,6 +9,8 @@
 //   S = S_neo-Hookean(C, J; μ, κ) + Σ_muscle entries w (T/λ) a0 ⊗ a0       Pa
 //   f_a = V0 F S ∇0N_a (+ hourglass forces k Σα γα(a) q(α))                N
 //   strain energy V0 (W_nH + Σ W_muscle), hourglass energy ½ k Σ q²        J (double)
+//   elastic energy V0 (W_nH + Σ W_muscle,passive) ≥ 0, stored in the material  J (double)
+//   (the strain energy without the active muscle potential, negative while a muscle contracts)
 // μ, κ are the element's weighted moduli (S is linear in them); effects that are off are
 // template flags, so a kernel specialised for an effect set carries no branch for the others.
 #include <cstdint>
@@ -48,43 +50,59 @@ template <typename T>
 struct ElementOutcome {
   T j;               // det F
   double strain;     // J, V0 (W_nH + Σ W_muscle) when kEnergy, else 0
+  double elastic;    // J, V0 (W_nH + Σ W_muscle,passive) when kEnergy, else 0
   double hourglass;  // J, ½ k Σ q² when kEnergy and kHourglass, else 0
 };
 
-// S at (C, J) and, when kEnergy, `energy += double(scale · W)` term by term (W in J/m³; scale = V0
-// for energies in J, 1 for densities).
+// S at (C, J) and, when kEnergy, its energies term by term (W in J/m³; scale = V0 for energies in
+// J, 1 for densities): `energy += double(scale · W)` with W = W_nH + Σ W_muscle (passive + active
+// at the current activation), and `elastic += ` the same without the active muscle terms.
 template <typename T, bool kElastic, bool kMuscle, bool kEnergy>
 SINEW_HD_INLINE SymMat3<T> element_stress(const SymMat3<T>& cg, T j, const ElementRow<T>& row,
-                                          const MuscleEntries<T>& muscles, T scale,
-                                          double& energy) {
+                                          const MuscleEntries<T>& muscles, T scale, double& energy,
+                                          double& elastic) {
   SymMat3<T> s = sym_zero<T>();
   if constexpr (kElastic) {
     s = neo_hookean_stress(cg, j, row.mu, row.kappa);
-    if constexpr (kEnergy) energy += double(scale * neo_hookean_energy(cg, j, row.mu, row.kappa));
+    if constexpr (kEnergy) {
+      const double w = double(scale * neo_hookean_energy(cg, j, row.mu, row.kappa));
+      energy += w;
+      elastic += w;
+    }
   }
   if constexpr (kMuscle) {
     for (std::int64_t k = muscles.begin; k < muscles.end; ++k) {
       const auto m = muscles.muscle[k];
       add_muscle_stress(cg, muscles.fibre[k], muscles.fraction[k], muscles.activation[m],
                         muscles.params[m], s);
-      if constexpr (kEnergy)
-        energy += double(scale * muscle_energy(cg, muscles.fibre[k], muscles.fraction[k],
-                                               muscles.activation[m], muscles.params[m]));
+      if constexpr (kEnergy) {
+        const double passive =
+            double(scale * muscle_passive_energy(cg, muscles.fibre[k], muscles.fraction[k],
+                                                 muscles.params[m]));
+        const double active =
+            double(scale * muscle_active_energy(cg, muscles.fibre[k], muscles.fraction[k],
+                                                muscles.activation[m], muscles.params[m]));
+        energy += passive;
+        energy += active;
+        elastic += passive;
+      }
     }
   }
   (void)scale;
   (void)energy;
+  (void)elastic;
   (void)muscles;
   return s;
 }
 
 // The whole element: nodal displacements u (m) -> nodal forces fe (N); returns J. When kEnergy,
-// adds its strain energy to `strain` and (kHourglass) its hourglass energy to `hourglass` (J) term
-// by term, so a caller summing many elements into one accumulator gets the same order as here.
+// adds its strain energy to `strain`, its elastic energy to `elastic` and (kHourglass) its
+// hourglass energy to `hourglass` (J) term by term, so a caller summing many elements into one
+// accumulator gets the same order as here.
 template <typename T, bool kElastic, bool kMuscle, bool kHourglass, bool kEnergy>
 SINEW_HD_INLINE T element_forces(const Vec3<T> (&u)[8], T h, const ElementRow<T>& row,
                                  const MuscleEntries<T>& muscles, Vec3<T> (&fe)[8], double& strain,
-                                 double& hourglass) {
+                                 double& elastic, double& hourglass) {
   const Mat3<T> f = hex8_deformation_gradient(u, h);
   Vec3<T> q[4];  // hourglass projections, taken before the stress so that u is no longer needed
   if constexpr (kHourglass) hourglass_projections(u, q);
@@ -92,7 +110,7 @@ SINEW_HD_INLINE T element_forces(const Vec3<T> (&u)[8], T h, const ElementRow<T>
   const SymMat3<T> cg = transpose_product(f);
   const T v0 = h * h * h;
   const SymMat3<T> s =
-      element_stress<T, kElastic, kMuscle, kEnergy>(cg, j, row, muscles, v0, strain);
+      element_stress<T, kElastic, kMuscle, kEnergy>(cg, j, row, muscles, v0, strain, elastic);
   hex8_nodal_forces(f, s, h, fe);
   if constexpr (kHourglass)
     hourglass += double(add_hourglass_projection_forces(q, row.hourglass_k, fe, kEnergy));
@@ -107,9 +125,9 @@ SINEW_HD_INLINE ElementOutcome<T> element_forces(const Vec3<T> (&u)[8], T h,
                                                  const ElementRow<T>& row,
                                                  const MuscleEntries<T>& muscles,
                                                  Vec3<T> (&fe)[8]) {
-  ElementOutcome<T> out{T(0), 0.0, 0.0};
-  out.j = element_forces<T, kElastic, kMuscle, kHourglass, kEnergy>(u, h, row, muscles, fe,
-                                                                    out.strain, out.hourglass);
+  ElementOutcome<T> out{T(0), 0.0, 0.0, 0.0};
+  out.j = element_forces<T, kElastic, kMuscle, kHourglass, kEnergy>(
+      u, h, row, muscles, fe, out.strain, out.elastic, out.hourglass);
   return out;
 }
 
@@ -123,8 +141,9 @@ SINEW_HD_INLINE void element_field(const Vec3<T> (&u)[8], T h, const ElementRow<
   j = determinant(f);
   const SymMat3<T> cg = transpose_product(f);
   energy_density = 0;
-  const SymMat3<T> s =
-      element_stress<T, kElastic, kMuscle, true>(cg, j, row, muscles, T(1), energy_density);
+  double elastic_density = 0;  // not an output field
+  const SymMat3<T> s = element_stress<T, kElastic, kMuscle, true>(cg, j, row, muscles, T(1),
+                                                                  energy_density, elastic_density);
   sigma = cauchy_stress(f, s, j);
 }
 

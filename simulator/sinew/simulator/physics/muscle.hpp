@@ -123,15 +123,33 @@ SINEW_HD_INLINE T add_muscle_stress(const SymMat3<T>& c, const Vec3<T>& a0, T fr
   return t;
 }
 
-// Energy per unit reference volume, J/m³, of w · muscle at fixed activation:
-// w σref λopt ∫_1^{λ/λopt} (a fa + fp). With activation = 0 this is the passive strain energy.
+// Energy per unit reference volume, J/m³, of w · muscle at fixed activation, in two parts:
+// the passive strain energy w σref λopt ∫_1^{λ/λopt} fp, stored in the tissue (≥ 0), and the
+// active potential w σref λopt a ∫_1^{λ/λopt} fa, the work the contractile force would do back to
+// the rest length: negative while the fibre is shorter than λopt (a contracting muscle), so it is
+// no energy stored in the material (docs/physics.md §8).
+template <typename T>
+SINEW_HD_INLINE T muscle_passive_energy(const SymMat3<T>& c, const Vec3<T>& a0, T fraction,
+                                        const MuscleParams<T>& p) {
+  const T x = fibre_stretch(c, a0) / p.optimal_stretch;
+  return fraction * p.reference_stress * p.optimal_stretch *
+         passive_fibre_integral(x, p.p1, p.p2, p.linear_stretch);
+}
+template <typename T>
+SINEW_HD_INLINE T muscle_active_energy(const SymMat3<T>& c, const Vec3<T>& a0, T fraction,
+                                       T activation, const MuscleParams<T>& p) {
+  const T x = fibre_stretch(c, a0) / p.optimal_stretch;
+  return fraction * p.reference_stress * p.optimal_stretch * activation *
+         blemker_active_integral(x);
+}
+
+// Their sum, J/m³: w σref λopt ∫_1^{λ/λopt} (a fa + fp), the potential whose 2 ∂/∂C is the muscle
+// stress at fixed activation. With activation = 0 this is the passive strain energy.
 template <typename T>
 SINEW_HD_INLINE T muscle_energy(const SymMat3<T>& c, const Vec3<T>& a0, T fraction, T activation,
                                 const MuscleParams<T>& p) {
-  const T x = fibre_stretch(c, a0) / p.optimal_stretch;
-  return fraction * p.reference_stress * p.optimal_stretch *
-         (activation * blemker_active_integral(x) +
-          passive_fibre_integral(x, p.p1, p.p2, p.linear_stretch));
+  return muscle_passive_energy(c, a0, fraction, p) +
+         muscle_active_energy(c, a0, fraction, activation, p);
 }
 
 }  // namespace sinew::simulator::physics

@@ -70,6 +70,7 @@ std::string to_json(const RunSummary& s) {
     row["time_s"] = number(e.time);
     row["kinetic_J"] = number(e.kinetic);
     row["strain_J"] = number(e.strain);
+    row["elastic_J"] = number(e.elastic);
     row["hourglass_J"] = number(e.hourglass);
     row["external_work_J"] = number(e.external_work);
     energies.push_back(std::move(row));
@@ -109,6 +110,7 @@ std::vector<Energies> read_energy_history(const std::string& path) {
     e.time = num(row, "time_s");
     e.kinetic = num(row, "kinetic_J");
     e.strain = num(row, "strain_J");
+    e.elastic = num(row, "elastic_J");
     e.hourglass = num(row, "hourglass_J");
     e.external_work = num(row, "external_work_J");
     out.push_back(e);

@@ -64,13 +64,20 @@ class StageClock {
   double seconds_[count] = {};
 };
 
-std::string hourglass_warning(const Energies& e) {
+std::string hourglass_warning(const Energies& e, double yardstick) {
   return fmt::format(
-      "hourglass energy is {:.0f}% of the strain energy at t = {:.6g} s (step {}): above {:.0f}% "
+      "hourglass energy is {:.0f}% of the elastic energy at t = {:.6g} s (step {}): above {:.0f}% "
       "the mesh may be folding in hourglass modes that no Jacobian check sees; refine the model, "
       "raise hourglass.kappa, or use hourglass.modulus p_wave where bending does not matter "
       "(docs/stability.md)",
-      100.0 * e.hourglass / e.strain, e.time, e.step, 100.0 * kHourglassWarningShare);
+      100.0 * e.hourglass / yardstick, e.time, e.step, 100.0 * kHourglassWarningShare);
+}
+
+double largest_elastic(const std::vector<Energies>& energies) {
+  double peak = 0;
+  for (const auto& e : energies)
+    if (std::isfinite(e.elastic)) peak = std::max(peak, e.elastic);
+  return peak;
 }
 
 double unix_seconds() {
@@ -91,6 +98,17 @@ bool interrupt_requested() {
 
 void clear_interrupt() {
   g_interrupt.store(0);
+}
+
+std::size_t first_hourglass_dominated(const std::vector<Energies>& energies) {
+  const double floor = kHourglassFloorShare * largest_elastic(energies);
+  for (std::size_t k = 0; k < energies.size(); ++k) {
+    const Energies& e = energies[k];
+    if (!std::isfinite(e.elastic) || !std::isfinite(e.hourglass)) continue;
+    const double yardstick = std::max(e.elastic, floor);
+    if (yardstick > 0 && e.hourglass > kHourglassWarningShare * yardstick) return k;
+  }
+  return energies.size();
 }
 
 RunResult run_scene(const RunOptions& options) {
@@ -191,20 +209,22 @@ RunResult run_scene(const RunOptions& options) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     write_run_summary(summary_path, summary);
   };
-  bool hourglass_warned = false;
+  // The hourglass warning, once, when the run ends (runner.hpp): its frames' energies are all known.
+  const auto judge_hourglass = [&] {
+    const std::size_t k = first_hourglass_dominated(summary.energies);
+    if (k == summary.energies.size()) return;
+    const Energies& e = summary.energies[k];
+    const double yardstick =
+        std::max(e.elastic, kHourglassFloorShare * largest_elastic(summary.energies));
+    summary.warnings.push_back(hourglass_warning(e, yardstick));
+    log::warn("{}", summary.warnings.back());
+  };
   const auto write_frame = [&] {
     Frame frame = backend->frame(want_fields);
     auto e = frame.energies;
     frame_writer.push(std::move(frame));
     e.time /= s;  // the summary speaks scene time throughout
     summary.energies.push_back(e);
-    // One-point elements can fold into hourglass modes that the centre Jacobian does not see
-    // (docs/stability.md); explicit codes (LS-DYNA, Abaqus) flag this share of the internal energy.
-    if (!hourglass_warned && e.hourglass > kHourglassWarningShare * e.strain && e.strain > 0) {
-      hourglass_warned = true;
-      summary.warnings.push_back(hourglass_warning(e));
-      log::warn("{}", summary.warnings.back());
-    }
   };
   const auto write_row = [&] {
     if (probes->empty()) return;
@@ -298,6 +318,7 @@ RunResult run_scene(const RunOptions& options) {
         write_ckpt();
         results->close();  // a failure of its last write is this run's error, not a bad file
         finish_loop();
+        judge_hourglass();
         summary.status = "interrupted";
         summary.message = fmt::format("stopped at step {} (t = {:.6g} s); resume with --restart {}",
                                       now, scene_time(), checkpoint_path);
@@ -316,6 +337,7 @@ RunResult run_scene(const RunOptions& options) {
   } catch (const InstabilityError& e) {
     wind_down(e);
     finish_loop();
+    judge_hourglass();
     summary.status = "unstable";
     summary.message = e.what();
     write_summary();
@@ -334,6 +356,7 @@ RunResult run_scene(const RunOptions& options) {
     throw;
   }
   finish_loop();
+  judge_hourglass();
   summary.status = "completed";
   write_summary();
   result.ran = true;

@@ -157,7 +157,7 @@ class CudaEngine final : public Backend, public CudaTiming {
   // back alone (CopyNodesBody).
   std::vector<Vec3<T>> pick(const Vec3<T>* from, const std::vector<Index>& nodes) const;
   void upload_vec(Vec3<T>* p, const std::vector<double>& flat);
-  void compute_energy_terms(double& strain, double& hourglass);
+  void compute_energy_terms(double& strain, double& elastic, double& hourglass);
   double kinetic_energy(const std::vector<Vec3<T>>& u, const std::vector<Vec3<T>>& up) const {
     return core_.kinetic_energy(u.data(), up.data(), arrays_.inverse_mass.data(), 0);
   }
@@ -225,8 +225,8 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<Vec3<T>> gravity_, rest_;
   DeviceArray<Vec3<T>> buf_[3];
   DeviceArray<Vec3<T>> snap_u_, snap_up_;
-  DeviceArray<double> element_energy_;
-  DeviceArray<double> energy_chunk_sum_;  // 2 per chunk of each collection (energies)
+  DeviceArray<double> element_energy_;    // 3 per element: strain, elastic, hourglass (J)
+  DeviceArray<double> energy_chunk_sum_;  // the same 3 per chunk of each collection
   DeviceArray<T> activation_now_;         // upload_activation
   // per-step scalars: per slot [activation (M) | force factors (F) | prescribed factors (P) |
   // energy test flag (1)];

@@ -51,31 +51,33 @@ double CudaEngine<T>::external_work() const {
 }
 
 template <typename T>
-void CudaEngine<T>::compute_energy_terms(double& strain, double& hourglass) {
-  if (element_energy_.size() != 2 * e_) element_energy_.allocate(2 * e_);
+void CudaEngine<T>::compute_energy_terms(double& strain, double& elastic, double& hourglass) {
+  constexpr int kTerms = 3;  // strain, elastic, hourglass (element_kernel's mode 2)
+  if (element_energy_.size() != kTerms * e_) element_energy_.allocate(kTerms * e_);
   if (!elem_force_.size()) elem_force_.allocate(e_ * 8);
   launch_elements(buffer(step_, 0), upload_activation(), 2, stream_);
   // Summed per collection in element-list order, chunk by chunk (the CPU's order): the chunks on
-  // the device (ChunkPairSumBody, the host's additions in the host's order), only their sums
-  // copied back and added here in order.
+  // the device (ChunkSumBody, the host's additions in the host's order), only their sums copied
+  // back and added here in order.
   std::size_t chunks = 0;
   for (const auto& c : collections_) chunks += chunk_count(c.elements.size());
-  if (energy_chunk_sum_.size() != 2 * chunks) energy_chunk_sum_.allocate(2 * chunks);
+  if (energy_chunk_sum_.size() != kTerms * chunks) energy_chunk_sum_.allocate(kTerms * chunks);
   std::size_t at = 0;
   for (const auto& c : collections_) {
     const std::size_t k = chunk_count(c.elements.size());
     if (k)
       forall(k, stream_,
-             ChunkPairSumBody{c.elements.get(), std::int32_t(c.elements.size()),
-                              element_energy_.get(), energy_chunk_sum_.get() + 2 * at});
+             ChunkSumBody<kTerms>{c.elements.get(), std::int32_t(c.elements.size()),
+                                  element_energy_.get(), energy_chunk_sum_.get() + kTerms * at});
     at += k;
   }
   SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
   const auto sums = energy_chunk_sum_.download(stream_);
-  strain = hourglass = 0;
+  strain = elastic = hourglass = 0;
   for (std::size_t c = 0; c < chunks; ++c) {
-    strain += sums[2 * c];
-    hourglass += sums[2 * c + 1];
+    strain += sums[kTerms * c];
+    elastic += sums[kTerms * c + 1];
+    hourglass += sums[kTerms * c + 2];
   }
 }
 
@@ -89,7 +91,7 @@ Energies CudaEngine<T>::energies_at(const std::vector<Vec3<T>>& u) {
   Energies e;
   e.step = step_;
   e.time = time();
-  compute_energy_terms(e.strain, e.hourglass);
+  compute_energy_terms(e.strain, e.elastic, e.hourglass);
   e.kinetic = kinetic_energy(u, download_pinned(buffer(step_, 2)));
   e.external_work = external_work();
   return e;
@@ -99,8 +101,8 @@ template <typename T>
 void CudaEngine<T>::check_blowup(double work) {
   const auto u = download_vec(buffer(step_, 0)), up = download_vec(buffer(step_, 2));
   const double ke = kinetic_energy(u, up);
-  double strain = 0, hg = 0;
-  compute_energy_terms(strain, hg);
+  double strain = 0, elastic = 0, hg = 0;
+  compute_energy_terms(strain, elastic, hg);
   if (!core_.blown_up(ke, strain + hg, work)) return;
   double move = 0;
   const Index worst = core_.fastest_node(u.data(), up.data(), move);

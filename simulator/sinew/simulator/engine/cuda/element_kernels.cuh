@@ -26,9 +26,9 @@ __global__ void __launch_bounds__(kBlock)
   wait_for_previous_kernel();
   let_next_kernel_start();
   Vec3<T> fe[8];
-  double strain = 0, hourglass = 0;
+  double strain = 0, elastic = 0, hourglass = 0;
   const T j = element_finish<T, kElastic, kMuscle, kHourglass, kMode == 2>(d, start, u, fe, strain,
-                                                                           hourglass);
+                                                                           elastic, hourglass);
   if (!(j > T(0))) status->bad_jacobian = 1;
   if constexpr (kMode == 1) {
 #pragma unroll
@@ -45,8 +45,9 @@ __global__ void __launch_bounds__(kBlock)
       out[std::size_t(a) * std::size_t(d.elements) + std::size_t(e)] = fe[a];
   }
   if constexpr (kMode == 2) {
-    energy[2 * std::size_t(e)] = strain;
-    energy[2 * std::size_t(e) + 1] = hourglass;
+    energy[3 * std::size_t(e)] = strain;
+    energy[3 * std::size_t(e) + 1] = elastic;
+    energy[3 * std::size_t(e) + 2] = hourglass;
   }
 }
 
