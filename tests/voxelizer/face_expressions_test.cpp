@@ -201,6 +201,18 @@ void expect_motion(const std::string& name, const ExpressionRun& r) {
     EXPECT_GT(u("brow_centre_left").y, 1.5);
     EXPECT_GT(u("brow_centre_right").y, 1.5);
     EXPECT_LT(std::abs(u("mouth_corner_left").y), 0.1);  // the mouth stays
+    // The C-line (Cotofana et al.): up the frontalis's middle the lower forehead rises and the
+    // upper forehead comes down. At 4 mm, 0.1 s: forehead_31 … _54 up 0.8–2.9 mm, _57 … _71
+    // down 0.8–4.6 mm; the sign changes at y ≈ 55 mm, 71% of the way from the brow (31.8 mm) to
+    // the hairline (64.3 mm); Cotofana's 61% would be at 51.6 mm.
+    for (const char* p : {"forehead_31", "forehead_39", "forehead_46", "forehead_50"}) {
+      SCOPED_TRACE(p);
+      EXPECT_GT(u(p).y, 0.5);
+    }
+    for (const char* p : {"forehead_57", "forehead_61", "forehead_64", "forehead_68"}) {
+      SCOPED_TRACE(p);
+      EXPECT_LT(u(p).y, -1.0);
+    }
   } else if (name == "frown") {
     // The inner brows move towards the midline.
     EXPECT_LT(u("brow_inner_left").x, -0.5);
