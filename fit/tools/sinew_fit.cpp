@@ -1,7 +1,8 @@
 // sinew-fit: per-frame muscle activations from marker trajectories (docs/fit.md).
 //
 //   sinew-fit SCENE MARKERS.csv -o OUTDIR [--muscles a,b,...] [--max-activation A]
-//             [--knot-interval S] [--smoothing L] [--corrections N] [--step-activation A0]
+//             [--knot-interval S] [--smoothing L] [--effort E] [--corrections N] [--step-activation A0]
+//             [--response-ramp S]
 //             [--marker-unit m|cm|mm] [--sample-interval S] [--cache DIR]
 //             [--device cpu|cuda|auto] [--threads N] [--quiet]
 //
@@ -45,14 +46,19 @@ int main(int argc, char** argv) {
                  "s between activation knots (default: the markers' median frame interval)");
   app.add_option("--smoothing", o.smoothing,
                  "Weight of the second-difference regulariser, relative (1e-3)");
+  app.add_option("--effort", o.effort,
+                 "Weight of the sum of activations (prefers the fewest muscles), relative (0)");
   app.add_option("--corrections", o.corrections,
-                 "Refits of the forward run's residual (2)");
+                 "Refits of the forward run's residual (4)");
   app.add_option("--step-activation", o.step_activation,
                  "Activation of each response run (0.3)");
+  app.add_option("--response-ramp", o.response_ramp,
+                 "s over which each response run ramps to its activation (default: the markers' "
+                 "median frame interval)");
   app.add_option("--marker-unit", unit, "Length unit of the markers (default: the scene's units)")
       ->check(CLI::IsMember({"m", "cm", "mm"}));
   app.add_option("--sample-interval", o.sample_interval,
-                 "s between probe rows of the runs (default: a quarter of the knot interval)");
+                 "s between probe rows of the runs (default: every step)");
   app.add_option("--cache", o.cache_dir,
                  "Keep the response runs here and reuse them when the scene and model match");
   app.add_option("--device", o.device, "cpu, cuda or auto (cpu)")

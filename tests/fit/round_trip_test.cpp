@@ -1,8 +1,8 @@
 // sinew-fit's round trip (docs/fit.md, "Round trip"): known smooth activation curves of six
 // muscles on the sample head are simulated on the CPU, the paths of probes at its 20 landmarks
-// become markers, and the fit of every rig muscle recovers the curves (within 0.05, marker RMS
+// and 40 more points of the face's skin become markers, and the fit of every rig muscle recovers the curves (within 0.05, marker RMS
 // ≤ 0.3 mm; with noise σ = 0.5 mm and 20% of the markers missing in every third frame, within
-// 0.1). Bad markers (a name that is no probe, NaN, time going backwards) end in an error naming
+// 0.1 up to 20 ms before the record's end). Bad markers (a name that is no probe, NaN, time going backwards) end in an error naming
 // the file, the line and the value, with nothing under the output's name.
 //
 // CI runs the 4 mm head (data/specs/sample_head_4mm.yaml) over 0.1 s; SINEW_FIT_SPEC=sample_head_3mm
@@ -85,6 +85,37 @@ std::vector<std::pair<std::string, std::array<double, 3>>> landmarks() {
   return out;
 }
 
+// Points of the face's skin (mm) as extra markers: the skin mesh's vertices in front of the face
+// (z > 60 mm, between the hairline and the chin, inside the cheeks), `count` of them spread by
+// farthest-point sampling from the nose tip. A capture's marker set of this size (50–100 dots on
+// the face) is usual; the 20 landmarks alone leave neighbouring muscles (zygomaticus major and
+// risorius at the mouth's corner) hard to tell apart.
+std::vector<std::array<double, 3>> face_points(const fs::path& skin_obj, int count) {
+  std::vector<std::array<double, 3>> v;
+  std::istringstream in(read(skin_obj));
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("v ", 0) != 0) continue;
+    std::array<double, 3> p{};
+    std::sscanf(line.c_str() + 2, "%lf %lf %lf", &p[0], &p[1], &p[2]);
+    if (p[2] > 60 && p[1] > -100 && p[1] < 60 && std::abs(p[0]) < 60) v.push_back(p);
+  }
+  std::vector<std::array<double, 3>> chosen;
+  std::vector<double> d2(v.size(), 1e300);
+  std::array<double, 3> last{0, -28.85, 111.844};  // the nose tip
+  for (int i = 0; i < count && !v.empty(); ++i) {
+    std::size_t best = 0;
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      const double dx = v[k][0] - last[0], dy = v[k][1] - last[1], dz = v[k][2] - last[2];
+      d2[k] = std::min(d2[k], dx * dx + dy * dy + dz * dz);
+      if (d2[k] > d2[best]) best = k;
+    }
+    last = v[best];
+    chosen.push_back(last);
+  }
+  return chosen;
+}
+
 struct Workspace {
   voxelizer::testing::TempDir dir;
   fs::path base_scene;
@@ -94,7 +125,10 @@ struct Workspace {
   double truth_run_s = 0;
 };
 
-std::string base_scene_text(const std::string& model, const std::string& muscles) {
+constexpr int kFacePoints = 40;
+
+std::string base_scene_text(const std::string& model, const std::string& muscles,
+                            const std::vector<std::array<double, 3>>& extra) {
   std::string s = "title: sinew-fit round trip\nunits: mm\nmodel: ../specs/" + model +
                   ".h5\neffects: [elasticity, hourglass, damping, muscles, sliding]\n"
                   "duration: " + std::to_string(kDuration) +
@@ -104,6 +138,10 @@ std::string base_scene_text(const std::string& model, const std::string& muscles
   for (const auto& [name, p] : landmarks())
     s += "  - {name: " + name + ", type: displacement, point: [" + std::to_string(p[0]) + ", " +
          std::to_string(p[1]) + ", " + std::to_string(p[2]) + "]}\n";
+  for (std::size_t i = 0; i < extra.size(); ++i)
+    s += "  - {name: face_" + std::to_string(i) + ", type: displacement, point: [" +
+         std::to_string(extra[i][0]) + ", " + std::to_string(extra[i][1]) + ", " +
+         std::to_string(extra[i][2]) + "]}\n";
   return s;
 }
 
@@ -120,7 +158,8 @@ void build(Workspace& w) {
     const formats::Model model = voxelizer::voxelize(voxelizer::read_spec(spec_path)).model;
     formats::write_model(model, (d / ("specs/" + spec_name() + ".h5")).string());
     fs::create_directories(d / "scenes");
-    w.base_scene = d.write("scenes/base.yaml", base_scene_text(spec_name(), ""));
+    const auto extra = face_points(d / "meshes/head/skin.obj", kFacePoints);
+    w.base_scene = d.write("scenes/base.yaml", base_scene_text(spec_name(), "", extra));
     std::string curves = "muscles:\n";
     for (const auto& t : kTruth) {
       curves += "  " + t.muscle + ": [";
@@ -130,7 +169,7 @@ void build(Workspace& w) {
       }
       curves += "]\n";
     }
-    const auto truth_scene = d.write("scenes/truth.yaml", base_scene_text(spec_name(), curves));
+    const auto truth_scene = d.write("scenes/truth.yaml", base_scene_text(spec_name(), curves, extra));
     simulator::RunOptions o;
     o.scene_path = truth_scene.string();
     o.output_dir = (d / "truth").string();
@@ -154,6 +193,10 @@ void build(Workspace& w) {
       paths.push_back(read_probe_path((d / "truth" / ("probe_" + p.name + ".csv")).string()));
     }
     w.names = m.names;
+    // SINEW_FIT_KEEP=DIR: a copy of the model, the scenes and the truth run there (to rerun
+    // sinew-fit by hand on them).
+    if (const char* keep = std::getenv("SINEW_FIT_KEEP"); keep && *keep)
+      fs::copy(d.path(), keep, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
     for (std::size_t f = 0; f < paths.front().times.size(); ++f) {
       m.times.push_back(paths.front().times[f]);
       m.lines.push_back(static_cast<int>(f) + 2);
@@ -176,14 +219,16 @@ const Workspace& workspace() {
   return w;
 }
 
-// The largest |fitted − truth| over every muscle and knot (0 for the muscles not driven).
-double activation_error(const FitResult& r, std::string* where = nullptr) {
+// The largest |fitted − truth| over every muscle and knot up to `until` s (0 for the muscles not
+// driven).
+double activation_error(const FitResult& r, std::string* where = nullptr, double until = 1e9) {
   double worst = 0;
   for (std::size_t k = 0; k < r.muscles.size(); ++k) {
     const Truth* truth = nullptr;
     for (const auto& t : kTruth)
       if (t.muscle == r.muscles[k]) truth = &t;
     for (std::size_t j = 0; j < r.knot_times.size(); ++j) {
+      if (r.knot_times[j] > until + 1e-9) break;
       const double expected = truth ? truth->at(r.knot_times[j]) : 0.0;
       const double e = std::abs(r.activations[k][j] - expected);
       if (e > worst) {
@@ -217,10 +262,12 @@ FitOptions options(const std::string& markers, const std::string& out) {
 
 TEST(FitRoundTrip, RecoversKnownActivationsFromLandmarkPaths) {
   const auto& w = workspace();
-  ASSERT_GE(w.names.size(), 20u);
+  ASSERT_EQ(w.names.size(), 20u + kFacePoints);
   const auto markers = w.dir.write("markers.csv", markers_csv(w.truth_markers));
   const auto out = w.dir / "fit_clean";
-  const FitResult r = run_fit(options(markers.string(), out.string()));
+  FitOptions o = options(markers.string(), out.string());
+  o.knot_interval = 0.01;
+  const FitResult r = run_fit(o);
   std::string where;
   const double e = activation_error(r, &where);
   std::printf("[round trip %s] truth run %.1f s; fit: %zu muscles, %zu knots, activation error "
@@ -257,14 +304,21 @@ TEST(FitRoundTrip, NoiseAndMissingMarkersStayWithinATenth) {
   }
   const auto markers = w.dir.write("markers_noisy.csv", markers_csv(m));
   const auto out = w.dir / "fit_noisy";
-  const FitResult r = run_fit(options(markers.string(), out.string()));
-  std::string where;
-  const double e = activation_error(r, &where);
+  // Noisy markers: knots every 20 ms and ten times the smoothing; the last 20 ms of activation
+  // (the tissue lags it by about 2/α = 40 ms, so markers inside the record hardly see it) are
+  // left out of the comparison (docs/fit.md, "Round trip").
+  FitOptions o = options(markers.string(), out.string());
+  o.knot_interval = 0.02;
+  o.smoothing = 1e-2;
+  const FitResult r = run_fit(o);
+  std::string where, where_all;
+  const double e = activation_error(r, &where, kDuration - 0.02);
+  const double e_all = activation_error(r, &where_all);
   std::printf("[round trip %s, noise 0.5 mm, 20%% missing in every third frame] activation error "
-              "%.4f (%s), marker RMS %.4f mm against the noisy markers; %d of %d response runs "
-              "reused, total %.1f s\n",
-              spec_name().c_str(), e, where.c_str(), r.rms_mm, r.response_runs_reused,
-              r.response_runs, r.total_s);
+              "%.4f to %.2f s (%s), %.4f with the last 20 ms (%s), marker RMS %.4f mm against the noisy "
+              "markers; %d of %d response runs reused, total %.1f s\n",
+              spec_name().c_str(), e, kDuration - 0.02, where.c_str(), e_all, where_all.c_str(),
+              r.rms_mm, r.response_runs_reused, r.response_runs, r.total_s);
   EXPECT_LE(e, 0.1) << where;
 }
 

@@ -131,17 +131,21 @@ BoundedSolution solve_bounded_least_squares(const Eigen::MatrixXd& a, const Eige
                                   a.rows(), a.cols(), y.size(), curves, values));
   if (!(options.smoothing > 0) || !std::isfinite(options.smoothing))
     throw ConfigError("", "smoothing", fmt::format("must be > 0, not {}", options.smoothing));
+  if (!(options.effort >= 0) || !std::isfinite(options.effort))
+    throw ConfigError("", "effort", fmt::format("must be ≥ 0, not {}", options.effort));
   Eigen::MatrixXd Q = a.transpose() * a;
   const double scale = Q.trace() / static_cast<double>(n);
   const double lambda = options.smoothing * (scale > 0 ? scale : 1.0);
+  const double mu = options.effort * (scale > 0 ? scale : 1.0);
   const Eigen::MatrixXd penalty = second_difference_penalty(curves, values);
   Q += lambda * penalty;
-  const Eigen::VectorXd q = a.transpose() * y;
+  const Eigen::VectorXd q = a.transpose() * y - Eigen::VectorXd::Constant(n, mu);
   BoundedSolution s = solve_box_qp(Q, q, lower, upper, start, options.max_sweeps,
                                    options.tolerance);
   s.lambda = lambda;
+  s.mu = mu;
   s.misfit = (a * s.x - y).squaredNorm();
-  s.objective = s.misfit + lambda * s.x.dot(penalty * s.x);
+  s.objective = s.misfit + lambda * s.x.dot(penalty * s.x) + 2 * mu * s.x.sum();
   return s;
 }
 

@@ -18,10 +18,12 @@ struct FitOptions {
   double max_activation = 1;         // upper bound of every activation, (0, 1]
   double knot_interval = 0;          // s between knots; 0: the markers' median frame interval
   double step_activation = 0.3;      // a0 of the response runs
+  double response_ramp = 0;          // s over which they ramp to a0; 0: the median frame interval
   double smoothing = 1e-3;           // λ relative to trace(AᵀA)/n (bounded_least_squares.hpp)
-  int corrections = 2;               // refits of the forward run's residual
+  double effort = 0;                 // μ relative to trace(AᵀA)/n (bounded_least_squares.hpp)
+  int corrections = 4;               // refits of the forward run's residual
   double marker_unit = 0;            // m per marker length unit; 0: the base scene's `units`
-  double sample_interval = 0;        // s between probe rows of the runs; 0: knot interval / 4
+  double sample_interval = 0;        // s between probe rows of the runs; 0: every step
   std::string cache_dir;  // response runs kept and reused here ("" : under the output's runs/)
   std::string device = "cpu";
   int threads = 0;

@@ -76,7 +76,9 @@ void write_fit_tables(const std::string& dir, const FitResult& r, const FitOptio
   j["best_iteration"] = r.best_iteration;
   j["options"] = {{"max_activation", o.max_activation},
                   {"step_activation", o.step_activation},
+                  {"response_ramp_s", o.response_ramp},
                   {"smoothing", o.smoothing},
+                  {"effort", o.effort},
                   {"corrections", o.corrections},
                   {"device", o.device}};
   j["runs"] = {{"response", r.response_runs},

@@ -199,10 +199,14 @@ void check_options(const FitOptions& o) {
     throw bad("--max-activation", fmt::format("must lie in (0, 1], not {}", o.max_activation));
   if (!(o.knot_interval >= 0) || !std::isfinite(o.knot_interval))
     throw bad("--knot-interval", fmt::format("must be ≥ 0 s, not {}", o.knot_interval));
+  if (!(o.response_ramp >= 0) || !std::isfinite(o.response_ramp))
+    throw bad("--response-ramp", fmt::format("must be ≥ 0 s, not {}", o.response_ramp));
   if (!(o.step_activation > 0 && o.step_activation <= 1))
     throw bad("--step-activation", fmt::format("must lie in (0, 1], not {}", o.step_activation));
   if (!(o.smoothing > 0) || !std::isfinite(o.smoothing))
     throw bad("--smoothing", fmt::format("must be > 0, not {}", o.smoothing));
+  if (!(o.effort >= 0) || !std::isfinite(o.effort))
+    throw bad("--effort", fmt::format("must be ≥ 0, not {}", o.effort));
   if (o.corrections < 0 || o.corrections > 20)
     throw bad("--corrections", fmt::format("must lie in [0, 20], not {}", o.corrections));
   if (!(o.marker_unit >= 0) || !std::isfinite(o.marker_unit))
@@ -284,10 +288,18 @@ FitResult run_fit(const FitOptions& o,
     throw FormatError(markers.file, fmt::format("line {}", markers.lines.back()),
                       "the markers end at t = 0: nothing to fit");
   Knots knots;
-  knots.interval = o.knot_interval > 0 ? o.knot_interval : median_interval(markers.times);
-  knots.count = std::max(1, static_cast<int>(std::ceil(end_time / knots.interval - 1e-9)));
-  const double sample = o.sample_interval > 0 ? o.sample_interval : knots.interval / 4;
-  const std::string work_output = fmt::format("{{interval: 0, probe_interval: {}}}", number(sample));
+  // J knots evenly spaced, the last at the last marker time, about the interval asked for apart;
+  // the response runs' ramp (independent of the knots, so that cached runs serve any knots).
+  const double frame_interval = median_interval(markers.times);
+  const double ramp = o.response_ramp > 0 ? o.response_ramp : frame_interval;
+  const double asked = o.knot_interval > 0 ? o.knot_interval : frame_interval;
+  knots.count = std::max(1, static_cast<int>(std::lround(end_time / asked)));
+  knots.interval = end_time / knots.count;
+  // The runs' probes: every step unless a sample interval is given.
+  const std::string work_output =
+      o.sample_interval > 0
+          ? fmt::format("{{interval: 0, probe_interval: {}}}", number(o.sample_interval))
+          : std::string("{interval: 0}");
 
   // Observations, mm from rest.
   const auto rows = observations(markers);
@@ -319,7 +331,7 @@ FitResult run_fit(const FitOptions& o,
   for (const auto& muscle : result.muscles) {
     const std::string text = maker.text(
         end_time,
-        muscles_yaml({muscle}, {{{0.0, 0.0}, {knots.interval, o.step_activation}}}), work_output);
+        muscles_yaml({muscle}, {{{0.0, 0.0}, {ramp, o.step_activation}}}), work_output);
     log::info("sinew-fit: response of {}", muscle);
     auto run = forward(text, response_root / ("response_" + muscle), model_file->sha256,
                        markers.names, o, models, !o.cache_dir.empty());
@@ -333,11 +345,13 @@ FitResult run_fit(const FitOptions& o,
   const int K = static_cast<int>(result.muscles.size());
   const int J = knots.count;
   const auto t_solve = Clock::now();
-  const Eigen::MatrixXd a = design_matrix(responses, o.step_activation, knots, markers.times, rows);
+  const Eigen::MatrixXd a =
+      design_matrix(responses, o.step_activation, ramp, knots, markers.times, rows);
   const Eigen::VectorXd lower = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(K) * J);
   const Eigen::VectorXd upper = Eigen::VectorXd::Constant(lower.size(), o.max_activation);
   BoundedOptions bo;
   bo.smoothing = o.smoothing;
+  bo.effort = o.effort;
   auto solution = solve_bounded_least_squares(a, y, K, J, lower, upper, {}, bo);
   result.solve_s += seconds_since(t_solve);
 

@@ -72,24 +72,60 @@ std::vector<Observation> observations(const Markers& markers) {
   return rows;
 }
 
+namespace {
+
+// The unit-ramp response R(t) of one response path on a uniform grid of step h = ramp / 8 up to
+// `end`, by R(t) = (ramp/a0) G(t) + R(t − ramp), and read back linearly.
+class RampResponse {
+ public:
+  RampResponse(const ProbePath& g, double a0, double ramp, double end)
+      : h_(ramp / kSub), values_(static_cast<std::size_t>(std::ceil(end / h_)) + 2) {
+    for (std::size_t i = 0; i < values_.size(); ++i) {
+      const auto gi = g.at(static_cast<double>(i) * h_);
+      for (int d = 0; d < 3; ++d) {
+        values_[i][d] = ramp / a0 * gi[d];
+        if (i >= static_cast<std::size_t>(kSub)) values_[i][d] += values_[i - kSub][d];
+      }
+    }
+  }
+  double at(double t, int d) const {
+    if (t <= 0) return 0;
+    const double x = t / h_;
+    const auto i = std::min(static_cast<std::size_t>(x), values_.size() - 2);
+    const double w = std::min(x - static_cast<double>(i), 1.0);
+    return (1 - w) * values_[i][d] + w * values_[i + 1][d];
+  }
+
+ private:
+  static constexpr int kSub = 8;
+  double h_;
+  std::vector<std::array<double, 3>> values_;
+};
+
+}  // namespace
+
 Eigen::MatrixXd design_matrix(const std::vector<std::vector<ProbePath>>& responses, double a0,
-                              const Knots& knots, const std::vector<double>& times,
+                              double ramp, const Knots& knots, const std::vector<double>& times,
                               const std::vector<Observation>& rows) {
   const int K = static_cast<int>(responses.size());
   const int J = knots.count;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()),
                                             static_cast<Eigen::Index>(K) * J);
-  const double scale = 1e3 / a0;  // m per a0 → mm per unit activation
+  double end = 0;
+  for (const double t : times) end = std::max(end, t);
+  std::vector<std::vector<RampResponse>> ramps(responses.size());
+  for (std::size_t k = 0; k < responses.size(); ++k)
+    for (const auto& g : responses[k]) ramps[k].emplace_back(g, a0, ramp, end);
+  const double scale = 1e3 / knots.interval;  // m → mm, and the hat's 1/τ
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const auto& o = rows[r];
     const double t = times[static_cast<std::size_t>(o.frame)];
     for (int k = 0; k < K; ++k) {
-      const ProbePath& g = responses[static_cast<std::size_t>(k)][static_cast<std::size_t>(o.marker)];
+      const RampResponse& R = ramps[static_cast<std::size_t>(k)][static_cast<std::size_t>(o.marker)];
       for (int j = 1; j <= J; ++j) {
-        const double before = t - knots.time(j - 1);
-        if (before <= 0) break;  // knot j and later start after t
-        double v = g.at(before)[o.component];
-        if (j < J) v -= g.at(t - knots.time(j))[o.component];
+        if (t <= knots.time(j - 1)) break;  // knot j and later start after t
+        double v = R.at(t - knots.time(j - 1), o.component) - R.at(t - knots.time(j), o.component);
+        if (j < J) v -= R.at(t - knots.time(j), o.component) - R.at(t - knots.time(j + 1), o.component);
         a(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k) * J + (j - 1)) = scale * v;
       }
     }

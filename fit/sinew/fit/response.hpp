@@ -4,10 +4,12 @@
 //
 // Activations are piecewise linear in time with knots t_j = j·τ (j = 0 … J), 0 at t_0 = 0 (the
 // face starts at rest) and held after t_J. A response run drives one muscle k alone with
-// g(t) = a0·clamp(t/τ, 0, 1) and records every marker's displacement G_k(t). The hat function of
-// knot j is (g(t − t_{j−1}) − g(t − t_j)) / a0 (the last knot: g(t − t_{J−1}) / a0), so by
-// superposition
-//   u_m(t) ≈ Σ_k Σ_j c_{k,j} (G_{k,m}(t − t_{j−1}) − G_{k,m}(t − t_j)) / a0.
+// g(t) = a0·clamp(t/τr, 0, 1) (τr: the response ramp, independent of the knots) and records
+// every marker's displacement G_{k,m}(t). By superposition the response to the unit ramp
+// r(t) = max(t, 0) is R(t) = (τr/a0) Σ_{i≥0} G(t − i·τr), and the hat function of knot j,
+// (r(t − t_{j−1}) − 2 r(t − t_j) + r(t − t_{j+1})) / τ (the last knot's:
+// (r(t − t_{J−1}) − r(t − t_J)) / τ), moves marker m by the same combination of R, so
+//   u_m(t) ≈ Σ_k Σ_j c_{k,j} hat-response_{k,j,m}(t).
 #include <array>
 #include <string>
 #include <vector>
@@ -45,9 +47,9 @@ struct Observation {
 std::vector<Observation> observations(const Markers& markers);
 
 // The design matrix, rows × (K · J): responses[k][m] is muscle k's response run at marker m,
-// driven to a0; values in mm per unit of activation.
+// driven to a0 over `ramp` s; values in mm per unit of activation.
 Eigen::MatrixXd design_matrix(const std::vector<std::vector<ProbePath>>& responses, double a0,
-                              const Knots& knots, const std::vector<double>& times,
+                              double ramp, const Knots& knots, const std::vector<double>& times,
                               const std::vector<Observation>& rows);
 
 }  // namespace sinew::fit
