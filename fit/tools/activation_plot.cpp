@@ -62,7 +62,10 @@ void axes(Image& img, const Panel& p, const std::string& title, const std::strin
 }  // namespace
 
 postprocess::Image draw_activation_plot(const FitResult& r) {
-  const int width = 1200, left = 110, plot_w = 760;
+  const int left = 110, plot_w = 760;
+  int legend_w = 0;
+  for (const auto& m : r.muscles) legend_w = std::max(legend_w, postprocess::text_width(m, 2));
+  const int width = std::max(1000, left + plot_w + 52 + legend_w + 20);
   const int legend_rows = static_cast<int>(r.muscles.size());
   const int top_h = std::max(420, legend_rows * 20 + 40), err_h = 200;
   Image img(width, top_h + err_h + 140, {255, 255, 255});
