@@ -390,5 +390,27 @@ TEST(RigTools, HeadAndRigWriteMeshesAndPictures) {
   EXPECT_TRUE(std::filesystem::exists(dir / "rig3/mentalis.obj"));
 }
 
+// A failing check still draws the muscles (issue 34, item 3: the picture is how a misplaced muscle
+// is seen) and says where the rest of each muscle lies and what helps: three times the depths
+// put the deep muscles into the skull.
+TEST(RigTools, AFailingCheckStillDrawsTheMusclesAndSaysWhereTheyLie) {
+  const TempDir dir;
+  const std::filesystem::path spec_path =
+      rig_spec(dir, ", muscles: [zygomaticus_major], depth_scale: 3", sample_landmarks_text());
+  ASSERT_EQ(tool(SINEW_RIG_EXE,
+                 spec_path.string() + " -o " + (dir / "rig").string() + " --muscles-png " +
+                     (dir / "m.png").string(),
+                 dir / "rig.log"),
+            1);
+  const std::string log = read(dir / "rig.log");
+  EXPECT_NE(log.find("zygomaticus_major_left only"), std::string::npos) << log;
+  EXPECT_NE(log.find("% in the skull)"), std::string::npos) << log;
+  EXPECT_NE(log.find("scale the depths with rig.depth_scale"), std::string::npos) << log;
+  EXPECT_EQ(log.find("beyond the mesh"), std::string::npos) << log;  // nothing past the skin
+  EXPECT_NE(log.find("drew the muscles to"), std::string::npos) << log;
+  EXPECT_GT(std::filesystem::file_size(dir / "m.png"), 10000u);
+  EXPECT_FALSE(std::filesystem::exists(dir / "rig/zygomaticus_major_left.obj"));
+}
+
 }  // namespace
 }  // namespace sinew::voxelizer

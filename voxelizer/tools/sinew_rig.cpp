@@ -60,8 +60,20 @@ int main(int argc, char** argv) {
     }
     // The landmarks' picture comes before the checks: it is how points off the skin are found.
     if (!landmarks_png.empty()) write_rig_picture(landmarks_png, skin, landmarks, {}, true);
+    // The muscles' picture comes before the check of how much of each lies in the tissue: it is
+    // how a muscle past an open mesh's edge is seen.
+    const CheckedRig built = build_spec_rig(spec);
+    if (!built.message.empty()) {
+      if (!muscles_png.empty()) {
+        std::vector<PictureMuscle> drawn;
+        for (const auto& m : built.muscles) drawn.push_back({m.name, &m.mesh});
+        write_rig_picture(muscles_png, skin, landmarks, drawn, false);
+        std::printf("drew the muscles to %s (the check below failed)\n", muscles_png.c_str());
+      }
+      throw sinew::GeometryError(spec.file.string(), spec.rig->field, built.message);
+    }
     const std::size_t own = spec.muscles.size();
-    add_rig_muscles(spec);
+    append_rig_muscles(spec, built);
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw sinew::IoError(dir, "", "cannot create the folder: " + ec.message());

@@ -320,8 +320,7 @@ Landmarks snap_landmarks(const Landmarks& landmarks, const TriangleMesh& skin) {
   return snapped;
 }
 
-void add_rig_muscles(Spec& spec) {
-  if (!spec.rig) return;
+CheckedRig build_spec_rig(const Spec& spec) {
   const RigSpec& rig = *spec.rig;
   const Landmarks landmarks = read_landmarks(rig.landmarks);
   TriangleMesh skin = load_mesh_source(spec.outer);
@@ -341,11 +340,16 @@ void add_rig_muscles(Spec& spec) {
   }
 
   const double margin = spec.voxel_size ? *spec.voxel_size : 3e-3;
-  const auto muscles =
-      build_rig(rig_recipes(landmarks, rig.muscles, rig.depth_scale), skin, margin);
+  const auto recipes = rig_recipes(landmarks, rig.muscles, rig.depth_scale);
+  CheckedRig out;
+  out.muscles = build_rig(recipes, skin, margin);
 
-  // How much of each muscle lies in the tissue: inside the skin and outside the skull.
+  // How much of each muscle lies in the tissue: inside the skin and outside the skull. Where the
+  // rest lies says what to change: past the skin (an end beyond an open mesh's edge, where the
+  // closest skin points stop: moving landmarks or covering the muscle helps, depths do not), in
+  // the skull, or deeper than tissue_thickness (depths and thickness help).
   const WindingNumber outer(skin);
+  const DistanceQuery beyond(skin);
   std::unique_ptr<WindingNumber> inner;
   std::unique_ptr<DistanceQuery> depth;
   if (spec.inner) {
@@ -356,31 +360,87 @@ void add_rig_muscles(Spec& spec) {
     depth = std::make_unique<DistanceQuery>(skin);
   }
   std::string outside;
-  for (const auto& m : muscles) {
-    std::int64_t in = 0;
+  bool past_skin = false, too_deep = false;
+  for (std::size_t i = 0; i < out.muscles.size(); ++i) {
+    const auto& m = out.muscles[i];
+    std::int64_t in = 0, skin_out = 0, skull = 0, deep = 0;
+    double farthest = 0;
+    Vec3d where{0, 0, 0};
     for (const auto& p : m.samples) {
-      bool ok = outer.inside(p);
-      if (ok && inner) ok = !inner->inside(p);
-      if (ok && depth) ok = depth->distance(p) <= *spec.tissue_thickness;
-      in += ok ? 1 : 0;
+      if (!outer.inside(p)) {
+        ++skin_out;
+        const double d = beyond.distance(p);
+        if (d > farthest) farthest = d, where = p;
+      } else if (inner && inner->inside(p)) {
+        ++skull;
+      } else if (depth && depth->distance(p) > *spec.tissue_thickness) {
+        ++deep;
+      } else {
+        ++in;
+      }
     }
-    const double share = static_cast<double>(in) / static_cast<double>(m.samples.size());
+    const double n = static_cast<double>(m.samples.size());
+    const double share = static_cast<double>(in) / n;
     log::debug("rig: {} {:.1f}% inside the tissue", m.name, 100 * share);
-    if (share < rig.min_inside) {
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "%s only %.0f%% inside", m.name.c_str(), 100 * share);
-      outside += (outside.empty() ? "" : ", ") + std::string(buf);
+    if (share >= rig.min_inside) continue;
+    char buf[320];
+    std::snprintf(buf, sizeof buf, "%s only %.0f%% inside", m.name.c_str(), 100 * share);
+    std::string item = buf;
+    std::string parts;
+    const auto part = [&](std::int64_t k, const char* where_text) {
+      if (k == 0) return;
+      std::snprintf(buf, sizeof buf, "%.0f%% %s", 100 * static_cast<double>(k) / n, where_text);
+      parts += (parts.empty() ? "" : ", ") + std::string(buf);
+    };
+    part(skin_out, "outside the skin");
+    if (skin_out > 0) {
+      // Which end: the recipe's origin or insertion (a ring: around its centre).
+      const RigRecipe& r = recipes[i];
+      std::string end = "around its centre";
+      if (r.shape == RigRecipe::Shape::sheet)
+        end = norm(where - r.origin) <= norm(where - r.insertion) ? "nearest its origin"
+                                                                  : "nearest its insertion";
+      parts += ", up to " + mm(farthest) + " beyond it " + end;
+      past_skin = past_skin || skin_out >= skull + deep;
     }
+    part(skull, "in the skull");
+    part(deep, "deeper than tissue_thickness");
+    too_deep = too_deep || skull + deep > skin_out;
+    outside += (outside.empty() ? "" : ", ") + item + " (" + parts + ")";
   }
   if (!outside.empty()) {
     char buf[96];
     std::snprintf(buf, sizeof buf, "%.0f%%", 100 * rig.min_inside);
-    throw GeometryError(spec.file.string(), rig.field,
-                        "rig muscles outside the tissue (skin to skull): " + outside +
-                            " (at least " + buf +
-                            " needed, rig.min_inside); check the landmarks, or the tissue's "
-                            "thickness, or scale the depths with rig.depth_scale");
+    std::string advice;
+    if (past_skin) {
+      advice +=
+          "; a muscle past the skin has an end beyond the mesh (an open mesh such as a face "
+          "mask stops the muscle at its edge): move the landmarks that end is built from "
+          "(docs/faces.md lists each muscle's) inside the mesh, or use a mesh that covers the "
+          "muscle; the tissue's thickness and rig.depth_scale do not change this";
+    }
+    if (too_deep) {
+      advice +=
+          "; for a muscle in the skull or too deep, check the landmarks, or the tissue's "
+          "thickness, or scale the depths with rig.depth_scale";
+    }
+    out.message = "rig muscles outside the tissue (skin to skull): " + outside + " (at least " +
+                  buf + " needed, rig.min_inside)" + advice;
   }
+  return out;
+}
+
+void add_rig_muscles(Spec& spec) {
+  if (!spec.rig) return;
+  const CheckedRig built = build_spec_rig(spec);
+  if (!built.message.empty())
+    throw GeometryError(spec.file.string(), spec.rig->field, built.message);
+  append_rig_muscles(spec, built);
+}
+
+void append_rig_muscles(Spec& spec, const CheckedRig& built) {
+  const RigSpec& rig = *spec.rig;
+  const auto& muscles = built.muscles;
 
   for (const auto& m : muscles) {
     for (const auto& other : spec.muscles) {

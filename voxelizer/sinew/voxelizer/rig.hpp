@@ -74,11 +74,26 @@ std::vector<std::pair<std::string, double>> landmark_distances(const Landmarks& 
 // corrected by eye on sinew-rig's picture (sinew-rig --snap-landmarks, docs/landmarks.md).
 Landmarks snap_landmarks(const Landmarks& landmarks, const TriangleMesh& skin);
 
+// The spec's rig built and checked (needs spec.rig): the landmarks within rig.landmark_tolerance
+// of the skin (else ConfigError naming each one and its distance), the muscles built, and
+// `message`, empty when at least rig.min_inside of each muscle lies in the tissue, else what
+// add_rig_muscles throws: each such muscle, its share, where the rest lies (outside the skin, with
+// how far beyond it and nearest which end; in the skull; deeper than tissue_thickness) and what to
+// change for that. sinew-rig draws the muscles before it reports the message.
+struct CheckedRig {
+  std::vector<RigMuscle> muscles;
+  std::string message;
+};
+CheckedRig build_spec_rig(const Spec& spec);
+
 // The spec's rig expanded: loads the landmarks and the skin (and the inner surface), checks every
 // landmark is within rig.landmark_tolerance of the skin (ConfigError naming each one that is not
 // and its distance), builds the muscles, checks that at least rig.min_inside of each lies in the
 // tissue (GeometryError naming each muscle that does not, with its share), and appends them to
 // spec.muscles (fibre regions as boxes; meshes as generated sources). No-op without a rig.
 void add_rig_muscles(Spec& spec);
+// The second half of add_rig_muscles: `built`'s muscles (its message empty) appended to
+// spec.muscles; throws ConfigError when the spec's own muscles use one of their names.
+void append_rig_muscles(Spec& spec, const CheckedRig& built);
 
 }  // namespace sinew::voxelizer
