@@ -35,15 +35,19 @@ TEST(JawGeometry, TheSampleHeadsAxisPivotAndIncisalPoint) {
   EXPECT_TRUE(in_mandible(j, {0, -95e-3, 60e-3}));
   EXPECT_FALSE(in_mandible(j, {0, -34e-3, 85e-3}));
   EXPECT_FALSE(in_mandible(j, {0, -80e-3, -20e-3}));
-  // A voxel between the lips is cut, one in the lower lip a voxel below is not, one in the
-  // cheek beside the mouth is cut only next to the skull.
+  // A voxel between the lips is cut (skin and all), one in the lower lip a voxel below is not;
+  // one in the cheek beside the teeth is cut only next to the skull and well under the skin;
+  // none behind the last molars (45 mm behind the incisal point).
   const double h = 3e-3;
   const Vec3d between = j.stomion - 3e-3 * j.forward;
-  EXPECT_TRUE(in_jaw_cut(j, between, h, -8e-3));
-  EXPECT_FALSE(in_jaw_cut(j, between - h * j.up, h, -8e-3));
-  const Vec3d cheek = j.stomion + 45e-3 * j.axis - 30e-3 * j.forward;
-  EXPECT_FALSE(in_jaw_cut(j, cheek, h, -8e-3));
-  EXPECT_TRUE(in_jaw_cut(j, cheek, h, -1e-3));
+  EXPECT_TRUE(in_jaw_cut(j, between, h, -8e-3, 1e-3));
+  EXPECT_FALSE(in_jaw_cut(j, between - h * j.up, h, -8e-3, 1e-3));
+  const Vec3d cheek = j.stomion + 40e-3 * j.axis - 30e-3 * j.forward;
+  EXPECT_FALSE(in_jaw_cut(j, cheek, h, -8e-3, 5e-3));  // far from the bone
+  EXPECT_TRUE(in_jaw_cut(j, cheek, h, -1e-3, 5e-3));   // next to it
+  EXPECT_FALSE(in_jaw_cut(j, cheek, h, -1e-3, 4e-3));  // next to it, but the skin is near
+  const Vec3d behind = j.stomion + 60e-3 * j.axis - 62e-3 * j.forward;
+  EXPECT_FALSE(in_jaw_cut(j, behind, h, -1e-3, 5e-3));
 }
 
 void expect_refused(Landmarks l, const std::string& landmark, const std::string& problem) {

@@ -53,12 +53,16 @@ bool near_occlusal_plane(const JawGeometry& j, const Vec3d& c, double h) {
          std::abs(dot(c - j.pivot, j.axis)) <= j.half_condyles;
 }
 
-bool in_jaw_cut(const JawGeometry& j, const Vec3d& c, double h, double skull_depth) {
+bool in_jaw_cut(const JawGeometry& j, const Vec3d& c, double h, double skull_depth,
+                double skin_depth) {
   if (!near_occlusal_plane(j, c, h)) return false;
-  if (skull_depth > -kVestibuleVoxels * h) return true;  // the vestibule, and the bone's own cut
   const double lateral = dot(c - j.stomion, j.axis);
   const double arch = dot(j.incisal - j.stomion, j.forward) - j.arch_curvature * lateral * lateral;
-  return std::abs(lateral) <= j.half_mouth && dot(c - j.stomion, j.forward) >= arch;
+  if (std::abs(lateral) <= j.half_mouth && dot(c - j.stomion, j.forward) >= arch)
+    return true;  // between the lips
+  // The vestibule along the teeth: next to the bone, under the cheek's skin.
+  return dot(c - j.incisal, j.forward) >= -kArchDepth && skull_depth > -kVestibuleVoxels * h &&
+         skin_depth >= kVestibuleVoxels * h;
 }
 
 }  // namespace sinew::voxelizer

@@ -16,10 +16,12 @@
 //    where the rotation moves little.
 //  - The cut (oral fissure and vestibule): the voxels whose centre lies within half a voxel of the
 //    occlusal plane, in front of the pivot and between the condyles, and either in front of the
-//    dental arch between the mouth's corners (the lips) or within 1.5 voxels of the skull (the
-//    vestibule: the cheeks' inner side is not attached to bone along the teeth), are removed, so
-//    the lips and the cheeks' deep layer part when the jaw opens. The arch is a parabola through
-//    the incisal point and the points 12 mm behind the mouth's corners.
+//    dental arch between the mouth's corners (the lips) or, along the teeth (at most 45 mm behind
+//    the incisal point: the dental arch's depth to the last molars is 40–50 mm in adults), within
+//    1.5 voxels of the skull and at least 1.5 voxels under the skin (the vestibule: the cheeks'
+//    inner side is not attached to bone along the teeth, and the cheek itself stays whole), are
+//    removed, so the lips and the cheeks' deep layer part when the jaw opens. The arch is a
+//    parabola through the incisal point and the points 12 mm behind the mouth's corners.
 #include <cstdint>
 
 #include "sinew/common/math.hpp"
@@ -30,7 +32,8 @@ namespace sinew::voxelizer {
 inline constexpr double kCondyleAheadOfTragus = 0.012;  // m
 inline constexpr double kLipDepth = 0.012;              // m, stomion to incisors
 inline constexpr double kMandibleBehindPivot = 0.010;   // m
-inline constexpr double kVestibuleVoxels = 1.5;         // voxels from the skull
+inline constexpr double kVestibuleVoxels = 1.5;         // voxels from the skull and the skin
+inline constexpr double kArchDepth = 0.045;             // m, incisal point to the last molars
 
 struct JawGeometry {
   Vec3d pivot, axis, forward, up;  // m; unit axis (the subject's left), forward, up = fwd × axis
@@ -48,9 +51,11 @@ JawGeometry jaw_geometry(const Landmarks& landmarks);
 // Whether a held (skull) node at p belongs to the mandible.
 bool in_mandible(const JawGeometry& jaw, const Vec3d& p);
 
-// Whether the voxel whose centre is c is cut (h: the voxel size; skull_depth: the skull's signed
-// distance at c, + inside, − outside, m; called only for voxels near the occlusal plane).
+// Whether the voxel whose centre is c is cut (h: the voxel size; skull_depth and skin_depth: the
+// skull's and the skin's signed distances at c, + inside, − outside, m; called only for voxels
+// near the occlusal plane).
 bool near_occlusal_plane(const JawGeometry& jaw, const Vec3d& c, double h);
-bool in_jaw_cut(const JawGeometry& jaw, const Vec3d& c, double h, double skull_depth);
+bool in_jaw_cut(const JawGeometry& jaw, const Vec3d& c, double h, double skull_depth,
+                double skin_depth);
 
 }  // namespace sinew::voxelizer

@@ -716,8 +716,10 @@ class Pipeline {
     }
     jaw_ = jaw_geometry(read_landmarks(spec_.rig->landmarks));
     const SignedField& skull = *inner_->field;
+    const SignedField& skin = *outer_.field;
     result_.summary.jaw_cut_voxels = drop_voxels(fractions_, grid, [&](const Vec3d& c) {
-      return near_occlusal_plane(*jaw_, c, h_) && in_jaw_cut(*jaw_, c, h_, skull(c).value);
+      return near_occlusal_plane(*jaw_, c, h_) &&
+             in_jaw_cut(*jaw_, c, h_, skull(c).value, skin(c).value);
     });
   }
 
