@@ -168,6 +168,7 @@ std::string effects_text(const Setup& s) {
   add(s.effects.muscles, "muscles");
   add(s.effects.sliding, "sliding");
   add(s.effects.loads, "loads");
+  add(s.effects.contact, "contact");
   return t;
 }
 

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <map>
 #include <sstream>
 #include <string>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "pipeline_test_util.hpp"
+#include "sinew/formats/hdf5_file.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/postprocess/results_reader.hpp"
 #include "sinew/simulator/engine/cuda_backend.hpp"
@@ -96,11 +98,11 @@ void voxelize_scan() {
 }
 
 // Runs data/scenes/face_NAME.yaml on `model` (sample_head_4mm or lee_perry_smith_4mm) on
-// `device`, once per triple.
+// `device` (without `contact`: the lips free to pass through each other), once per set.
 const ExpressionRun& run(const std::string& name, const std::string& device,
-                         const std::string& model = "sample_head_4mm") {
-  static std::map<std::tuple<std::string, std::string, std::string>, ExpressionRun> runs;
-  const auto key = std::make_tuple(name, device, model);
+                         const std::string& model = "sample_head_4mm", bool contact = true) {
+  static std::map<std::tuple<std::string, std::string, std::string, bool>, ExpressionRun> runs;
+  const auto key = std::make_tuple(name, device, model, contact);
   if (auto it = runs.find(key); it != runs.end()) return it->second;
   const auto& d = workspace();
   std::string scene = read(kSource / ("data/scenes/face_" + name + ".yaml"));
@@ -120,15 +122,22 @@ const ExpressionRun& run(const std::string& name, const std::string& device,
   EXPECT_NE(h, std::string::npos);
   if (h != std::string::npos)
     scene.replace(h, held.size(), "duration: " + (cut.count(name) ? cut.at(name) : "0.1"));
-  // The scenes let the sample head's forehead glide (its spec's sliding condition); a model
-  // without one (the scan's spec holds its deep tissue) runs them without `sliding`.
+  // The scenes let the sample head's forehead glide (its spec's sliding condition) and its lips
+  // touch (the pairs across its jaw's cut); a model without them (the scan's spec holds its deep
+  // tissue and has no jaw) runs them without `sliding` and `contact`.
   if (model.rfind("sample_head", 0) != 0) {
-    const std::string glide = ", sliding]";
+    const std::string glide = ", sliding, contact]";
     const auto g = scene.find(glide);
     EXPECT_NE(g, std::string::npos);
     if (g != std::string::npos) scene.replace(g, glide.size(), "]");
   }
-  const std::string tag = name + "_" + device + "_" + model;
+  if (!contact) {
+    const std::string touch = ", contact]";
+    const auto g = scene.find(touch);
+    EXPECT_NE(g, std::string::npos);
+    if (g != std::string::npos) scene.replace(g, touch.size(), "]");
+  }
+  const std::string tag = name + "_" + device + "_" + model + (contact ? "" : "_no_contact");
   const auto scene_path = d.write("scenes/" + tag + ".yaml", scene);
   simulator::RunOptions o;
   o.scene_path = scene_path.string();
@@ -322,6 +331,64 @@ INSTANTIATE_TEST_SUITE_P(SampleHead, FaceExpression,
                          ::testing::Combine(::testing::Values("brow_raise", "frown", "smile",
                                                               "sneer", "pout", "grimace", "ah",
                                                               "surprise", "oo", "chew"),
+                                            ::testing::Values("cpu", "cuda")),
+                         name_of);
+
+// The smallest gap across the lips' pairs (formats::Jaw::lip_pairs) over every frame of a run, mm:
+// (x_upper − x_lower) · up with x = rest + u and up = forward × axis; negative where a lip has
+// passed through the other. At rest it is the cut's height, one voxel (4 mm).
+double min_lip_gap_mm(const ExpressionRun& r) {
+  const formats::Model m = formats::read_model((workspace() / "specs/sample_head_4mm.h5").string());
+  EXPECT_TRUE(m.jaw && !m.jaw->lip_pairs.empty());
+  if (!m.jaw) return 0;
+  const auto& j = *m.jaw;
+  const Vec3d f{j.forward[0], j.forward[1], j.forward[2]}, a{j.axis[0], j.axis[1], j.axis[2]};
+  const Vec3d up = cross(f, a);
+  const std::string path = (r.dir / "results.h5").string();
+  const auto file = formats::hdf5::open_checked(path);
+  const auto u = formats::hdf5::read<double>(file, "/frames/displacement", path);
+  const std::size_t n = m.node_count(), frames = u.size() / (3 * n);
+  EXPECT_GT(frames, 1u);
+  double gap = 1e9;
+  for (std::size_t fr = 0; fr < frames; ++fr) {
+    const double* uf = u.data() + 3 * n * fr;
+    for (const auto& [upper, lower] : j.lip_pairs) {
+      const auto pu = m.node_position(upper), pl = m.node_position(lower);
+      double g = 0;
+      for (int k = 0; k < 3; ++k)
+        g += (pu[std::size_t(k)] + uf[3 * std::size_t(upper) + std::size_t(k)] -
+              pl[std::size_t(k)] - uf[3 * std::size_t(lower) + std::size_t(k)]) *
+             up[k];
+      gap = std::min(gap, g);
+    }
+  }
+  return 1e3 * gap;
+}
+
+class LipContact : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+// The lips touch instead of passing through each other (`contact`, physics/lip_contact.hpp): in
+// the pout, the smile, "oo" and the chewing stroke no lower-lip node rises above its upper-lip
+// partner at any frame, on each backend; without `contact` (CPU) the same scenes are run too and
+// their smallest gap reported (the test fails if contact makes no difference where they cross).
+TEST_P(LipContact, TheLipsDoNotPassThroughEachOther) {
+  const auto& [name, device] = GetParam();
+  if (device == "cuda" && !simulator::cuda_device_available()) GTEST_SKIP() << "no CUDA device";
+  const ExpressionRun& r = run(name, device);
+  const double with = min_lip_gap_mm(r);
+  // The run's own report of it (run_summary.json contact.min_gap_mm).
+  EXPECT_GT(r.summary.contact_pairs, 0);
+  EXPECT_NEAR(1e3 * r.summary.contact_min_gap, with, 1e-9);
+  const double without = min_lip_gap_mm(run(name, "cpu", "sample_head_4mm", false));
+  std::cout << name << " on " << device << ": smallest gap across the lips " << with
+            << " mm with contact, " << without << " mm without\n";
+  // The partner's lag of one step (Δt · v): micrometres.
+  EXPECT_GT(with, -0.01);
+  if (without < -0.01) EXPECT_GT(with, without + 0.1);
+}
+
+INSTANTIATE_TEST_SUITE_P(SampleHead, LipContact,
+                         ::testing::Combine(::testing::Values("smile", "pout", "oo", "chew"),
                                             ::testing::Values("cpu", "cuda")),
                          name_of);
 

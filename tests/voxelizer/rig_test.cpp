@@ -327,7 +327,8 @@ TEST(Rig, SnappedLandmarksLieOnTheSkin) {
 }
 
 // The tools: sinew-head writes the head and its landmarks; sinew-rig builds the rig from a spec,
-// writes its 18 muscles as closed OBJ files and the two pictures; a landmark off the skin makes it
+// writes its 18 muscles as closed OBJ files and the three pictures (landmarks, muscles, jaw; the
+// jaw's refused on a rig without one); a landmark off the skin makes it
 // fail with the landmark's name, the landmarks' picture drawn (to correct it by eye) and not the
 // muscles'; --snap-landmarks writes the points moved onto the skin and builds the rig from them.
 int tool(const std::string& exe, const std::string& args, const std::filesystem::path& log) {
@@ -350,7 +351,8 @@ TEST(RigTools, HeadAndRigWriteMeshesAndPictures) {
   const std::string spec = (dir / "specs/sample_head_4mm.yaml").string();
   ASSERT_EQ(tool(SINEW_RIG_EXE,
                  spec + " -o " + (dir / "rig").string() + " --landmarks-png " +
-                     (dir / "l.png").string() + " --muscles-png " + (dir / "m.png").string(),
+                     (dir / "l.png").string() + " --muscles-png " + (dir / "m.png").string() +
+                     " --jaw-png " + (dir / "j.png").string(),
                  dir / "rig.log"),
             0)
       << read(dir / "rig.log");
@@ -363,6 +365,20 @@ TEST(RigTools, HeadAndRigWriteMeshesAndPictures) {
   EXPECT_EQ(objs, 18);
   EXPECT_GT(std::filesystem::file_size(dir / "l.png"), 10000u);
   EXPECT_GT(std::filesystem::file_size(dir / "m.png"), 10000u);
+  EXPECT_GT(std::filesystem::file_size(dir / "j.png"), 10000u);
+  // --jaw-png on a rig without a jaw: an error naming rig.jaw, no picture.
+  std::string no_jaw = read(spec);
+  const auto at = no_jaw.find("jaw: true");
+  ASSERT_NE(at, std::string::npos);
+  no_jaw.replace(at, 9, "jaw: false");
+  const auto no_jaw_spec = dir.write("specs/no_jaw.yaml", no_jaw);
+  EXPECT_EQ(tool(SINEW_RIG_EXE,
+                 no_jaw_spec.string() + " -o " + (dir / "rig4").string() + " --jaw-png " +
+                     (dir / "j4.png").string(),
+                 dir / "rig4.log"),
+            1);
+  EXPECT_NE(read(dir / "rig4.log").find("rig.jaw"), std::string::npos) << read(dir / "rig4.log");
+  EXPECT_FALSE(std::filesystem::exists(dir / "j4.png"));
 
   Landmarks l = head_landmarks(HeadParams{});
   l.points["chin"].y -= 12e-3;  // 12 mm below the chin, in the air

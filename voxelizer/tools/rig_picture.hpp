@@ -22,4 +22,11 @@ void write_rig_picture(const std::string& path, const TriangleMesh& skin,
                        const Landmarks& landmarks, const std::vector<PictureMuscle>& muscles,
                        bool numbered_landmarks);
 
+// Writes a PNG of the jaw (rig.jaw, jaw.hpp) from the subject's left: the skull under a
+// half-transparent skin with the mandible (the skull's part in the mandible's region) in orange,
+// the hinge axis end on through the pivot, the occlusal plane and the incisal point, and a legend
+// with the pivot, the axis and the condyles' distance. Throws ConfigError as jaw_geometry does.
+void write_jaw_picture(const std::string& path, const TriangleMesh& skin, const TriangleMesh& skull,
+                       const Landmarks& landmarks);
+
 }  // namespace sinew::voxelizer

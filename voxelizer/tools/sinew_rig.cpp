@@ -1,11 +1,14 @@
-// sinew-rig SPEC -o DIR [--landmarks-png FILE] [--muscles-png FILE] [--snap-landmarks FILE]
+// sinew-rig SPEC -o DIR [--landmarks-png FILE] [--muscles-png FILE] [--jaw-png FILE]
+//                       [--snap-landmarks FILE]
 // Builds the muscle rig of a voxelizer spec's `rig:` section (docs/faces.md) without voxelizing:
 // checks the landmarks and that each muscle lies in the tissue, writes every rig muscle as a
 // closed OBJ (mm) into DIR for a look in any 3D package, and prints each muscle's size and fibres.
 // --landmarks-png draws the skin from the front with the landmarks numbered and listed; it is
 // drawn before the checks, so that a first guess whose points are off the skin can be corrected
 // by eye (docs/landmarks.md); --muscles-png the muscles through a half-transparent skin
-// (rig_picture.hpp). --snap-landmarks FILE writes the spec's landmarks moved to their closest
+// (rig_picture.hpp); --jaw-png the jaw (`rig: {jaw: true}`) from the side: the mandible the
+// voxelizer will cut from the skull, its hinge axis, the occlusal plane and the incisal point.
+// --snap-landmarks FILE writes the spec's landmarks moved to their closest
 // points on the skin (in the spec's units) and builds the rig from FILE instead.
 // Any error: a message on stderr, exit code 1 (2 for command-line errors).
 #include <CLI/CLI.hpp>
@@ -31,6 +34,9 @@ int main(int argc, char** argv) {
   std::string landmarks_png, muscles_png;
   app.add_option("--landmarks-png", landmarks_png, "PNG of the skin with the landmarks numbered");
   app.add_option("--muscles-png", muscles_png, "PNG of the muscles under a half-transparent skin");
+  std::string jaw_png;
+  app.add_option("--jaw-png", jaw_png,
+                 "PNG of the jaw from the side: the mandible, its hinge axis, the occlusal plane");
   std::string snap;
   app.add_option("--snap-landmarks", snap,
                  "write the landmarks moved onto the skin to this file and use them");
@@ -60,6 +66,18 @@ int main(int argc, char** argv) {
     }
     // The landmarks' picture comes before the checks: it is how points off the skin are found.
     if (!landmarks_png.empty()) write_rig_picture(landmarks_png, skin, landmarks, {}, true);
+    if (!jaw_png.empty()) {
+      if (!spec.rig->jaw)
+        throw sinew::ConfigError(spec_path, spec.rig->field + ".jaw",
+                                 "--jaw-png draws the jaw, but the rig has none (jaw: true)");
+      if (!spec.inner)
+        throw sinew::ConfigError(spec_path, spec.rig->field + ".jaw",
+                                 "the jaw is cut from the skull: give the spec an `inner` surface");
+      TriangleMesh skull = load_mesh_source(*spec.inner);
+      clean_mesh(skull, spec.weld_tolerance);
+      write_jaw_picture(jaw_png, skin, skull, landmarks);
+      std::printf("drew the jaw to %s\n", jaw_png.c_str());
+    }
     // The muscles' picture comes before the check of how much of each lies in the tissue: it is
     // how a muscle past an open mesh's edge is seen.
     const CheckedRig built = build_spec_rig(spec);

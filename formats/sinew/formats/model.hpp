@@ -154,6 +154,10 @@ struct Jaw {
   Point axis{1, 0, 0};       // unit
   Point forward{0, 0, 1};    // unit, normal to axis
   Point incisal{0, 0, 0};    // m, the incisal point at rest (where the opening is measured)
+  // The faces of the cut between the lips (docs/faces.md "Lips and teeth"): per pair the node of
+  // the upper side (the upper lip, the cheek above the teeth) and the node straight below it across
+  // the cut. Each node in at most one pair. Optional (empty: no contact between the lips).
+  std::vector<std::array<Index, 2>> lip_pairs;
   bool operator==(const Jaw&) const = default;
 };
 

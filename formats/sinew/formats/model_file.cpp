@@ -164,6 +164,9 @@ void write_all(Writer& w, const Model& m) {
     w.array("/jaw/axis", std::vector<double>(j.axis.begin(), j.axis.end()));
     w.array("/jaw/forward", std::vector<double>(j.forward.begin(), j.forward.end()));
     w.array("/jaw/incisal", std::vector<double>(j.incisal.begin(), j.incisal.end()));
+    if (!j.lip_pairs.empty())
+      w.array("/jaw/lip_pairs", j.lip_pairs.front().data(),
+              static_cast<std::int64_t>(j.lip_pairs.size()), 2);
   }
 
   const auto& su = m.surfaces;
@@ -469,6 +472,8 @@ Model read_all(Reader& r, int version) {
     j.axis = point("/jaw/axis");
     j.forward = point("/jaw/forward");
     j.incisal = point("/jaw/incisal");
+    if (r.has("/jaw/lip_pairs"))
+      j.lip_pairs = rows_of<2>(r.array<std::int32_t>("/jaw/lip_pairs", 2));
     m.jaw = std::move(j);
   }
 

@@ -502,6 +502,41 @@ class Validator {
         j.axis[0] * j.forward[0] + j.axis[1] * j.forward[1] + j.axis[2] * j.forward[2];
     if (std::abs(cosine) > kUnitLengthTolerance)
       fail("/jaw/forward", fmt::format("not normal to /jaw/axis: cosine {}", cosine));
+    lip_pairs(j);
+  }
+
+  // The lips' pairs: node ids in range, two different nodes, each node in at most one pair, the
+  // upper node above the lower one (along up = forward × axis) and not both held.
+  void lip_pairs(const Jaw& j) {
+    const std::size_t n_count = m_.node_count();
+    const Point up{j.forward[1] * j.axis[2] - j.forward[2] * j.axis[1],
+                   j.forward[2] * j.axis[0] - j.forward[0] * j.axis[2],
+                   j.forward[0] * j.axis[1] - j.forward[1] * j.axis[0]};
+    const auto held = [&](Index nd) {
+      return std::binary_search(m_.rigid_nodes.begin(), m_.rigid_nodes.end(), nd) ||
+             std::binary_search(j.nodes.begin(), j.nodes.end(), nd);
+    };
+    std::set<Index> seen;
+    for (std::size_t i = 0; i < j.lip_pairs.size(); ++i) {
+      const auto idx = static_cast<std::int64_t>(i);
+      const auto [upper, lower] = j.lip_pairs[i];
+      for (const Index nd : {upper, lower}) {
+        if (nd < 0 || static_cast<std::size_t>(nd) >= n_count)
+          fail("/jaw/lip_pairs", idx, fmt::format("node id {} out of range [0, {})", nd, n_count));
+        if (!seen.insert(nd).second)
+          fail("/jaw/lip_pairs", idx, fmt::format("node {} is in two pairs", nd));
+      }
+      if (held(upper) && held(lower))
+        fail("/jaw/lip_pairs", idx,
+             fmt::format("nodes {} and {} are both held (rigid or on the jaw)", upper, lower));
+      const auto pu = m_.node_position(upper), pl = m_.node_position(lower);
+      const double rise =
+          (pu[0] - pl[0]) * up[0] + (pu[1] - pl[1]) * up[1] + (pu[2] - pl[2]) * up[2];
+      if (!(rise > 0))
+        fail("/jaw/lip_pairs", idx,
+             fmt::format("the upper node {} is not above the lower node {} (up = forward × axis)",
+                         upper, lower));
+    }
   }
 
   void sets(const std::vector<NamedSet>& named, const std::string& group, std::size_t count,

@@ -216,6 +216,11 @@ PartitionedCpuEngine<T>::PartitionedCpuEngine(const formats::Model& model,
                                               const simulator::Setup& setup, Plan plan,
                                               MPI_Comm comm)
     : core_(model, setup, plan), comm_(comm) {
+  // The lips' contact reads its partner's u(n), which may lie outside this rank's halo.
+  if (setup.lip_contact)
+    throw ConfigError("", "effects",
+                      "'contact' (the lips' contact) is not in the partitioned engine yet: run the "
+                      "scene on one process (sinew-simulate) or leave contact out");
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
   threads_ = setup.threads > 0 ? setup.threads : omp_get_max_threads();

@@ -22,9 +22,12 @@
 //    inner side is not attached to bone along the teeth, and the cheek itself stays whole), are
 //    removed, so the lips and the cheeks' deep layer part when the jaw opens. The arch is a
 //    parabola through the incisal point and the points 12 mm behind the mouth's corners.
+#include <array>
 #include <cstdint>
+#include <vector>
 
 #include "sinew/common/math.hpp"
+#include "sinew/formats/model.hpp"
 #include "sinew/voxelizer/landmarks.hpp"
 
 namespace sinew::voxelizer {
@@ -57,5 +60,15 @@ bool in_mandible(const JawGeometry& jaw, const Vec3d& p);
 bool near_occlusal_plane(const JawGeometry& jaw, const Vec3d& c, double h);
 bool in_jaw_cut(const JawGeometry& jaw, const Vec3d& c, double h, double skull_depth,
                 double skin_depth);
+
+// The lips' contact pairs (formats::Jaw::lip_pairs) across the cut: `cut` holds the lattice
+// coordinates of the removed voxels. Along the lattice axis nearest the face's up, each column of
+// removed voxels has a node column at each of its four edges; the node just above the removed run
+// and the one just below it, both present, make a pair (upper, lower). Where a node could pair
+// twice (columns of different heights meet), the pair across the smaller gap wins; pairs of two
+// held nodes (rigid or on the jaw: `held` sorted) are left out. Sorted by upper node.
+std::vector<std::array<formats::Index, 2>> lip_pairs(
+    const JawGeometry& jaw, const formats::Model& model,
+    const std::vector<std::array<std::int32_t, 3>>& cut, const std::vector<formats::Index>& held);
 
 }  // namespace sinew::voxelizer

@@ -34,6 +34,7 @@ std::string summary_json(const Summary& s) {
   j["cut_nodes"] = s.cut_nodes;
   j["jaw_nodes"] = s.jaw_nodes;
   j["jaw_cut_voxels"] = s.jaw_cut_voxels;
+  j["lip_pairs"] = s.lip_pairs;
   for (const auto& [n, c] : s.node_sets) j["node_sets"][n] = c;
   for (const auto& m : s.meshes) {
     const auto& d = m.diagnostics;
@@ -94,8 +95,11 @@ std::string summary_text(const Summary& s) {
     line("cut nodes      %lld (on the crop's cut, held rigid)",
          static_cast<long long>(s.cut_nodes));
   if (s.jaw_nodes > 0)
-    line("jaw nodes      %lld (the mandible; %lld voxels cut between the lips and teeth)",
-         static_cast<long long>(s.jaw_nodes), static_cast<long long>(s.jaw_cut_voxels));
+    line(
+        "jaw nodes      %lld (the mandible; %lld voxels cut between the lips and teeth, %lld "
+        "contact pairs across the cut)",
+        static_cast<long long>(s.jaw_nodes), static_cast<long long>(s.jaw_cut_voxels),
+        static_cast<long long>(s.lip_pairs));
   for (const auto& [n, c] : s.node_sets)
     line("  node set %-20s %lld nodes", n.c_str(), static_cast<long long>(c));
   o << "surfaces\n";

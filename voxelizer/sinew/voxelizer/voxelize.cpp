@@ -138,6 +138,8 @@ class Pipeline {
   VoxelizeResult result_;
   double h_ = 0;
   std::optional<JawGeometry> jaw_;  // rig.jaw
+  // The lattice coordinates of the voxels the jaw's cut removed (for the lips' contact pairs).
+  std::vector<std::array<std::int32_t, 3>> jaw_cut_;
 
   LoadedMesh outer_;
   std::optional<LoadedMesh> inner_;
@@ -694,6 +696,13 @@ class Pipeline {
     }
     if (jaw_) split_the_jaw();
     if (spec_.crop) hold_the_cut();
+    if (m.jaw) {
+      std::vector<formats::Index> held = m.rigid_nodes;
+      held.insert(held.end(), m.jaw->nodes.begin(), m.jaw->nodes.end());
+      std::sort(held.begin(), held.end());
+      m.jaw->lip_pairs = lip_pairs(*jaw_, m, jaw_cut_, held);
+      result_.summary.lip_pairs = static_cast<std::int64_t>(m.jaw->lip_pairs.size());
+    }
     s.rigid_nodes = static_cast<std::int64_t>(m.rigid_nodes.size());
     s.jaw_nodes = m.jaw ? static_cast<std::int64_t>(m.jaw->nodes.size()) : 0;
     s.sliding_nodes = static_cast<std::int64_t>(m.sliding.size());
@@ -718,8 +727,15 @@ class Pipeline {
     const SignedField& skull = *inner_->field;
     const SignedField& skin = *outer_.field;
     result_.summary.jaw_cut_voxels = drop_voxels(fractions_, grid, [&](const Vec3d& c) {
-      return near_occlusal_plane(*jaw_, c, h_) &&
-             in_jaw_cut(*jaw_, c, h_, skull(c).value, skin(c).value);
+      const bool cut = near_occlusal_plane(*jaw_, c, h_) &&
+                       in_jaw_cut(*jaw_, c, h_, skull(c).value, skin(c).value);
+      if (cut) {
+        std::array<std::int32_t, 3> v{};
+        for (int k = 0; k < 3; ++k)
+          v[k] = static_cast<std::int32_t>(std::floor((c[k] - grid.origin[k]) / grid.voxel_size));
+        jaw_cut_.push_back(v);
+      }
+      return cut;
     });
   }
 

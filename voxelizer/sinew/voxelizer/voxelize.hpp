@@ -64,6 +64,7 @@ struct Summary {
   std::int64_t cut_nodes = 0;       // nodes on the crop's cut, held rigid
   std::int64_t jaw_nodes = 0;       // the mandible's nodes (rig.jaw), apart from the rigid ones
   std::int64_t jaw_cut_voxels = 0;  // voxels removed between the lips and along the teeth
+  std::int64_t lip_pairs = 0;       // contact pairs across that cut (formats::Jaw::lip_pairs)
   std::vector<std::pair<std::string, std::int64_t>> node_sets;
   std::vector<MeshReport> meshes;
   std::int64_t embedded_vertices = 0, embedding_outside = 0;

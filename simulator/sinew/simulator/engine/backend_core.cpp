@@ -40,8 +40,9 @@ std::int32_t to_i32(std::int64_t v, const char* what) {
 }
 
 // The constraint program in the one order of loads and constraints: per node, nodal forces by set,
-// capture of u* (prescribed entries), sliding, planes in list order, prescribed sets in order,
-// rigid. Grouped by node (ascending ids: neighbouring sliding nodes share GPU warps).
+// capture of u* (prescribed entries), sliding, planes in list order, lip contact, prescribed sets
+// in order, jaw, rigid. Grouped by node (ascending ids: neighbouring sliding nodes share GPU
+// warps).
 }  // namespace
 
 template <typename T>
@@ -80,6 +81,12 @@ ConstraintArrays<T> make_constraint_program(const PreparedModel& p) {
     add(p.plane_nodes[k], kOpPlane, k);
     c.plane_normal.push_back(to_vec<T>(p.plane_normals[k]));
   }
+  for (std::size_t k = 0; k < p.contact_node.size(); ++k) {
+    add(p.contact_node[k], kOpContact, k);
+    c.contact_partner.push_back(std::int32_t(p.contact_partner[k]));
+    c.contact_share.push_back(T(p.contact_share[k]));
+  }
+  c.contact_up = to_vec<T>(p.contact_up);
   {
     std::size_t q = 0;
     for (const auto& pd : p.prescribed)
@@ -219,7 +226,10 @@ ConstraintData<T> host_constraint_data(const EngineArrays<T>& a,
           a.rest.data(),
           a.gravity.empty() ? nullptr : a.gravity.data(),
           std::int32_t(c.force_per_node.size()),
-          c.jaw_factor};
+          c.jaw_factor,
+          c.contact_partner.data(),
+          c.contact_share.data(),
+          c.contact_up};
 }
 
 template <typename T>

@@ -59,6 +59,9 @@ struct ConstraintArrays {
   std::vector<std::int32_t> prescribed_mask;   // per prescribed set, bit c: component c
   std::vector<Vec3<T>> plane_normal;           // per plane entry, unit
   std::int32_t jaw_factor = -1;                // ConstraintData::jaw_factor
+  std::vector<std::int32_t> contact_partner;   // per contact entry (ConstraintData)
+  std::vector<T> contact_share;                // per contact entry, σ s
+  Vec3<T> contact_up{T(0), T(0), T(0)};        // unit
 };
 
 // The typed arrays of a run in scalar T (T(x) of the prepared doubles, as both engines always did,

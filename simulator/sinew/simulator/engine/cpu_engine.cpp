@@ -238,7 +238,9 @@ bool CpuEngine<T>::update_nodes() {
 
 template <typename T>
 double CpuEngine<T>::apply_constraints(std::vector<Vec3<T>>& u, std::int64_t step, bool loads) {
-  const ConstraintData<T> d = constraint_data();
+  ConstraintData<T> d = constraint_data();
+  d.u_now = u_.data();  // u(n), u(n−1): the lips' contact predicts the partner from them
+  d.u_prev = up_.data();
   core_.step_scalars(step, scalars_.data());
   const T* factor = scalars_.data() + core_.muscle_count();
   std::vector<double> partial(chunk_count(std::size_t(d.count)), 0.0);

@@ -117,6 +117,15 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
             1e-6)
       bad("jaw", "axis and forward must be orthogonal unit vectors");
   }
+  if (setup.lip_contact) {
+    for (const auto& [upper, lower] : setup.lip_contact->pairs) {
+      check_nodes({upper, lower}, n_nodes, "lip_contact.pairs");
+      if (upper == lower) bad("lip_contact.pairs", "a pair names one node twice");
+    }
+    const auto& up = setup.lip_contact->up;
+    if (std::abs(std::hypot(up[0], up[1], up[2]) - 1) > 1e-6)
+      bad("lip_contact.up", "must be a unit vector");
+  }
   for (const auto& p : setup.sliding_planes) {
     check_nodes(p.nodes, n_nodes, "sliding_planes.nodes");
     if (!(std::hypot(p.normal[0], p.normal[1], p.normal[2]) > 0))
@@ -391,6 +400,11 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
     plan.stages.push_back(
         {"sliding planes",
          fmt::format("{} planes, {} nodes", setup.sliding_planes.size(), plane_nodes)});
+  if (setup.lip_contact)
+    plan.stages.push_back(
+        {"lip contact", fmt::format("{} pairs across the cut between the lips: the upper node "
+                                    "kept above the lower one",
+                                    setup.lip_contact->pairs.size())});
   if (fx.loads && prescribed_nodes)
     plan.stages.push_back(
         {"prescribed displacements",
@@ -449,6 +463,9 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
   if (setup.jaw)
     add("jaw nodes + their captures", fmt::format("int32 + 3 {}", tn),
         setup.jaw->nodes.size() * (4 + 3 * t));
+  if (setup.lip_contact)
+    add("lip contact entries", fmt::format("int32 partner + {} share", tn),
+        2 * setup.lip_contact->pairs.size() * (4 + t));
   return plan;
 }
 
@@ -459,9 +476,10 @@ std::string Plan::explain() const {
   auto onoff = [](bool b) { return b ? "on" : "off"; };
   o << fmt::format(
       "Effects: elasticity {}, hourglass {}, damping {}, gravity {}, muscles {}, sliding {}, loads "
-      "{}\n",
+      "{}, contact {}\n",
       onoff(effects.elasticity), onoff(effects.hourglass), onoff(effects.damping),
-      onoff(effects.gravity), onoff(effects.muscles), onoff(effects.sliding), onoff(effects.loads));
+      onoff(effects.gravity), onoff(effects.muscles), onoff(effects.sliding), onoff(effects.loads),
+      onoff(effects.contact));
   o << "Stages (each step, in order):\n";
   for (std::size_t i = 0; i < stages.size(); ++i)
     o << fmt::format("  {}. {}: {}\n", i + 1, stages[i].name, stages[i].detail);

@@ -124,6 +124,28 @@ PreparedModel prepare_model(const formats::Model& model, const Setup& setup, con
   }
   p.rigid = setup.rigid_nodes;
   if (setup.jaw) p.jaw_nodes = setup.jaw->nodes;
+  if (setup.lip_contact) {
+    // Held: rigid (the closed jaw's nodes among them) or moved by the jaw.
+    const auto held = [&](Index nd) {
+      return std::binary_search(p.rigid.begin(), p.rigid.end(), nd) ||
+             std::binary_search(p.jaw_nodes.begin(), p.jaw_nodes.end(), nd);
+    };
+    for (const auto& [upper, lower] : setup.lip_contact->pairs) {
+      const bool hu = held(upper), hl = held(lower);
+      if (!hu) {
+        p.contact_node.push_back(upper);
+        p.contact_partner.push_back(lower);
+        p.contact_share.push_back(hl ? 1.0 : 0.5);
+      }
+      if (!hl) {
+        p.contact_node.push_back(lower);
+        p.contact_partner.push_back(upper);
+        p.contact_share.push_back(hu ? -1.0 : -0.5);
+      }
+    }
+    const auto& up = setup.lip_contact->up;
+    p.contact_up = {up[0], up[1], up[2]};
+  }
   if (fx.sliding && !model.sliding.empty()) {
     std::vector<std::int32_t> local(model.surfaces.size(), -1);
     for (const auto& b : model.sliding) {

@@ -59,6 +59,11 @@ struct PreparedModel {
   std::vector<Index> rigid;
   // The jaw (Setup::jaw): its nodes; empty without one.
   std::vector<Index> jaw_nodes;
+  // Lip contact (Setup::lip_contact): one entry per free node of a pair (physics/lip_contact.hpp):
+  // the node, its partner, σ s (σ = +1 upper, −1 lower; s = ½, or 1 when the partner is held).
+  std::vector<Index> contact_node, contact_partner;
+  std::vector<double> contact_share;
+  std::array<double, 3> contact_up{0, 0, 0};  // unit
   // Sliding (empty unless simulated): one surface per model surface in use; one entry per binding.
   std::vector<PreparedSurface> surfaces;
   std::vector<Index> slide_node;

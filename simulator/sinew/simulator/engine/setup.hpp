@@ -41,6 +41,7 @@ struct Effects {
   bool muscles = false;    // muscle fibre stresses (active + passive)
   bool sliding = false;    // the model's sliding bindings (nodes at rest distance from a surface)
   bool loads = false;      // prescribed displacements and nodal forces below
+  bool contact = false;    // the lips' contact (the model's /jaw/lip_pairs, Setup::lip_contact)
 };
 
 enum class TimeStepPolicy {
@@ -116,6 +117,13 @@ struct JawMotion {
   }
 };
 
+// Contact between the lips (physics/lip_contact.hpp): across each pair the upper node stays above
+// the lower one along `up`. With effects.contact, from the model's /jaw/lip_pairs.
+struct LipContact {
+  std::vector<std::array<Index, 2>> pairs;  // upper, lower; each node once
+  Vec3d up{0, 1, 0};                        // unit: the jaw's forward × axis
+};
+
 struct InitialVelocity {
   std::vector<Index> nodes;
   Vec3d velocity{0, 0, 0};  // m/s
@@ -158,6 +166,7 @@ struct Setup {
   // Always honoured.
   std::vector<SlidingPlane> sliding_planes;
   std::optional<JawMotion> jaw;
+  std::optional<LipContact> lip_contact;
   std::vector<InitialVelocity> initial_velocities;
   // effects.sliding uses every binding in Model::sliding (no selection here).
 

@@ -10,14 +10,16 @@
 #include "sinew/simulator/passes/sliding_lists.hpp"
 #include "sinew/simulator/physics/element.hpp"
 #include "sinew/simulator/physics/jaw.hpp"
+#include "sinew/simulator/physics/lip_contact.hpp"
 
 namespace sinew::simulator {
 
 // The loads and constraints of a step as one program per constrained node: op = kind << 28 | arg,
 // a node's ops in the CPU's order (nodal forces by set, capture of u*, sliding, planes in list
-// order, prescribed sets in order, jaw, rigid). Each op reads and writes only its node, so one thread
-// per node running its ops in that order gives the CPU's result with no race (a node in two sets,
-// or on two planes, included).
+// order, lip contact, prescribed sets in order, jaw, rigid). Each op writes only its node (the
+// lips' contact reads its partner's u(n) and u(n−1), which no op writes), so one thread per node
+// running its ops in that order gives the CPU's result with no race (a node in two sets, or on two
+// planes, included).
 enum ConstraintOp : std::int32_t {
   kOpForce = 0,      // arg: force set
   kOpCapture = 1,    // arg: prescribed entry q (u* = u)
@@ -26,6 +28,7 @@ enum ConstraintOp : std::int32_t {
   kOpPrescribe = 4,  // arg: prescribed entry q
   kOpRigid = 5,
   kOpJaw = 6,  // arg: its capture entry q (as a prescribed entry's); the jaw's map in the factors
+  kOpContact = 7,  // arg: contact entry (its partner across the lips' cut and its share)
 };
 constexpr std::int32_t kOpShift = 28, kOpArg = (1 << kOpShift) - 1;
 // Whether the op is a prescribed motion whose reaction is (u − u*)/A, u* captured before the
@@ -55,6 +58,15 @@ struct ConstraintData {
   std::int32_t force_sets;
   // Where the jaw's map (physics/jaw.hpp, kJawMapSize numbers) starts in the factors; −1: no jaw.
   std::int32_t jaw_factor = -1;
+  // Lip contact (physics/lip_contact.hpp), per contact entry: the partner node and σ s (σ = +1
+  // for the upper node, −1 for the lower; s its share); the face's unit up.
+  const std::int32_t* contact_partner = nullptr;
+  const T* contact_share = nullptr;
+  Vec3<T> contact_up{T(0), T(0), T(0)};
+  // u(n) and u(n−1) of every node, read by the contact ops (the engines set them at each step: the
+  // state's buffers rotate); null in a program without contact.
+  const Vec3<T>* u_now = nullptr;
+  const Vec3<T>* u_prev = nullptr;
 };
 
 // Runs ops [begin, end) of node i on v (its u(n+1) after the update) and returns the result;
@@ -96,6 +108,17 @@ SINEW_HD_INLINE Vec3<T> run_ops(const ConstraintData<T>& d, std::int32_t i, std:
         v = physics::project_to_plane(v, d.plane_normal[arg]);
         projected = projected + (v - before);
         break;
+      case kOpContact: {
+        if (!loads) break;  // the initial constraints: the lips at rest, apart
+        const std::int32_t j = d.contact_partner[arg];
+        const T share = d.contact_share[arg];
+        const Vec3<T> normal = share < T(0) ? -d.contact_up : d.contact_up;
+        v = physics::lip_contact(v, d.rest[i] - d.rest[j],
+                                 physics::coasting(d.cd, d.u_now[j], d.u_prev[j]), normal,
+                                 share < T(0) ? -share : share);
+        projected = projected + (v - before);
+        break;
+      }
       case kOpPrescribe: {
         const std::int32_t set = d.prescribed_set[arg], mask = d.prescribed_mask[set];
         const bool comps[3] = {(mask & 1) != 0, (mask & 2) != 0, (mask & 4) != 0};
@@ -118,11 +141,12 @@ SINEW_HD_INLINE Vec3<T> run_ops(const ConstraintData<T>& d, std::int32_t i, std:
 // from where the forces put it; its force is that move over A = Δt²/m (central differences):
 // R = (u − u*)/A for a prescribed set (u* captured before the node's constraints, so this also
 // counts the projections of a node that is prescribed too), and for a node with no prescribed set
-// R = Σ (v after − v before)/A over its sliding and plane projections (zero work on a fixed
-// surface in exact arithmetic; nonzero when the projection stops a node thrown at the surface, or
-// works on round-off noise in float: docs/physics.md, "Instability"). Rigid nodes do not move: no
-// work. Separate from run_ops so that an engine can add the terms where the node is not run (the
-// partitioned engine adds every node's terms on every rank in the one-device chunk order).
+// R = Σ (v after − v before)/A over its sliding, plane and contact projections (zero work on a
+// fixed surface in exact arithmetic; nonzero when the projection stops a node thrown at the
+// surface, or works on round-off noise in float: docs/physics.md, "Instability"). Rigid nodes do
+// not move: no work. Separate from run_ops so that an engine can add the terms where the node is
+// not run (the partitioned engine adds every node's terms on every rank in the one-device chunk
+// order).
 template <typename T>
 SINEW_HD_INLINE void add_program_work(const ConstraintData<T>& d, std::int32_t i,
                                       std::int32_t begin, std::int32_t end, const T* factor,

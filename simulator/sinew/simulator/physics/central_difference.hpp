@@ -47,4 +47,14 @@ SINEW_HD_INLINE Vec3<T> central_difference_update(const CentralDifference<T>& cd
   return next;
 }
 
+// Where a node coasts to with no force: u(n+1) = B u(n) + Cc u(n−1) (its velocity kept, damped),
+// as central_difference_update with R − f = 0 (the lips' contact predicts a partner with it).
+template <typename T>
+SINEW_HD_INLINE Vec3<T> coasting(const CentralDifference<T>& cd, const Vec3<T>& u,
+                                 const Vec3<T>& u_prev) {
+  Vec3<T> next;
+  for (int k = 0; k < 3; ++k) next[k] = multiply_add(cd.c, u_prev[k], cd.b * u[k]);
+  return next;
+}
+
 }  // namespace sinew::simulator::physics

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <limits>
 #include <utility>
 
 #include <fmt/format.h>
@@ -165,6 +166,11 @@ LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>&
                       p.name, p.distance));
     }
   }
+  if (const auto lips = lip_contact_of(model)) {
+    summary.contact_pairs = std::int64_t(lips->pairs.size());
+    summary.contact_on = setup.effects.contact;
+    summary.contact_min_gap = std::numeric_limits<double>::infinity();
+  }
   if (setup.jaw) {
     summary.jaw_nodes = std::int64_t(setup.jaw->nodes.size());
     summary.jaw_max_incisal_opening = max_incisal_opening(setup, plan.dt, plan.steps);
@@ -193,6 +199,11 @@ std::string explain_run(LoadedRun& run, const RunOptions& options) {
   if (run.summary.jaw_nodes > 0)
     text += fmt::format("  jaw: {} nodes; incisal opening up to {:.1f} mm\n", run.summary.jaw_nodes,
                         1e3 * run.summary.jaw_max_incisal_opening);
+  if (run.summary.contact_pairs > 0)
+    text += fmt::format(
+        "  lips: {} pairs across the cut between them, contact {} (the smallest gap over the "
+        "frames goes to run_summary.json, contact.min_gap_mm)\n",
+        run.summary.contact_pairs, run.summary.contact_on ? "on" : "off");
   for (const auto& w : run.summary.warnings) text += fmt::format("  warning: {}\n", w);
   const bool element_fields =
       std::any_of(resolved.fields.begin(), resolved.fields.end(), [](auto f) {

@@ -62,6 +62,12 @@ std::string to_json(const RunSummary& s) {
     j["jaw"] = {{"nodes", s.jaw_nodes},
                 {"max_incisal_opening_mm", 1e3 * s.jaw_max_incisal_opening}};
   }
+  if (s.contact_pairs > 0) {
+    j["contact"] = {{"pairs", s.contact_pairs},
+                    {"effect", s.contact_on},
+                    {"min_gap_mm", number(1e3 * s.contact_min_gap)},
+                    {"min_gap_time_s", number(s.contact_min_gap_time)}};
+  }
   j["frames"] = s.frames;
   auto energies = nlohmann::ordered_json::array();
   for (const auto& e : s.energies) {

@@ -55,6 +55,12 @@ struct RunSummary {
   // (m; scene_jaw.hpp incisal_opening over the run's steps).
   std::int64_t jaw_nodes = 0;
   double jaw_max_incisal_opening = 0;
+  // The lips' pairs (a model whose jaw has them, with the effect `contact` on or off): their count
+  // and the smallest gap across them over the frames (m, scene_jaw.hpp smallest_lip_gap;
+  // negative: a lip through the other) and when (s).
+  std::int64_t contact_pairs = 0;
+  bool contact_on = false;
+  double contact_min_gap = 0, contact_min_gap_time = 0;
   std::vector<Energies> energies;  // one per frame, simulated time
   std::vector<std::string> warnings;
 };

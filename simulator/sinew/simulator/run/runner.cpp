@@ -23,6 +23,7 @@
 #include "sinew/simulator/output/results_writer.hpp"
 #include "sinew/simulator/run/run_limits.hpp"
 #include "sinew/simulator/run/run_setup.hpp"
+#include "sinew/simulator/run/scene_jaw.hpp"
 
 namespace sinew::simulator {
 
@@ -219,8 +220,17 @@ RunResult run_scene(const RunOptions& options) {
     summary.warnings.push_back(hourglass_warning(e, yardstick));
     log::warn("{}", summary.warnings.back());
   };
+  // The lips' smallest gap is reported whenever the model has pairs, with `contact` or without.
+  const std::optional<LipContact> lips = lip_contact_of(model);
   const auto write_frame = [&] {
     Frame frame = backend->frame(want_fields);
+    if (lips) {
+      const double gap = smallest_lip_gap(*lips, model, frame.displacements);
+      if (gap < summary.contact_min_gap) {
+        summary.contact_min_gap = gap;
+        summary.contact_min_gap_time = frame.time / s;
+      }
+    }
     auto e = frame.energies;
     frame_writer.push(std::move(frame));
     e.time /= s;  // the summary speaks scene time throughout

@@ -16,13 +16,14 @@ namespace sinew::simulator {
 namespace {
 
 // The names the scene file uses, for reading and for writing (to_string and friends).
-constexpr NameTable<Effect, 7> kEffectNames{{{"elasticity", Effect::elasticity},
+constexpr NameTable<Effect, 8> kEffectNames{{{"elasticity", Effect::elasticity},
                                              {"hourglass", Effect::hourglass},
                                              {"damping", Effect::damping},
                                              {"gravity", Effect::gravity},
                                              {"muscles", Effect::muscles},
                                              {"sliding", Effect::sliding},
-                                             {"loads", Effect::loads}}};
+                                             {"loads", Effect::loads},
+                                             {"contact", Effect::contact}}};
 constexpr NameTable<HourglassModulus, 2> kHourglassModulusNames{
     {{"shear", HourglassModulus::shear}, {"p_wave", HourglassModulus::p_wave}}};
 constexpr NameTable<Precision, 2> kPrecisionNames{
@@ -565,6 +566,12 @@ std::vector<std::string> left_out_effects(const Scene& scene, const formats::Mod
         "out 'sliding': those nodes move freely instead of gliding (add sliding to effects)",
         model.sliding.size(), surfaces.size() == 1 ? "" : "s", fmt::join(surfaces, "', '")));
   }
+  if (!scene.has(Effect::contact) && model.jaw && !model.jaw->lip_pairs.empty()) {
+    notes.push_back(fmt::format(
+        "the model has {} contact pairs across the cut between the lips, but the scene's effects "
+        "leave out 'contact': the lips can pass through each other (add contact to effects)",
+        model.jaw->lip_pairs.size()));
+  }
   if (!scene.has(Effect::muscles) && !model.muscles.empty()) {
     notes.push_back(fmt::format(
         "the model has {} muscle{}, but the scene's effects leave out 'muscles': their fibres add "
@@ -601,6 +608,7 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
   s.effects.muscles = scene.has(Effect::muscles);
   s.effects.sliding = scene.has(Effect::sliding);
   s.effects.loads = scene.has(Effect::loads);
+  s.effects.contact = scene.has(Effect::contact);
   for (const auto e : scene.effects) out.effects.push_back(to_string(e));
 
   if (s.effects.sliding && model.sliding.empty()) {
@@ -611,6 +619,13 @@ ResolvedScene resolve_scene(const Scene& scene, const formats::Model& model,
   if (s.effects.muscles && model.muscles.empty()) {
     throw ConfigError(scene.file, "effects", "'muscles' is listed but the model has no muscles");
   }
+  if (s.effects.contact && !(model.jaw && !model.jaw->lip_pairs.empty())) {
+    throw ConfigError(scene.file, "effects",
+                      "'contact' is listed but the model has no contact pairs (the lips' pairs "
+                      "come with the jaw: voxelize the head with `rig: {jaw: true}`, "
+                      "docs/faces.md \"Lips and teeth\")");
+  }
+  if (s.effects.contact) s.lip_contact = lip_contact_of(model);
   out.left_out = left_out_effects(scene, model);
 
   s.precision = options.precision ? *options.precision : scene.precision;

@@ -27,10 +27,10 @@ namespace sinew::simulator {
 
 // The physical effects a scene can ask for. Only the listed ones are simulated; the engine
 // allocates nothing for the others.
-enum class Effect { elasticity, hourglass, damping, gravity, muscles, sliding, loads };
-inline constexpr std::array<Effect, 7> kAllEffects = {
+enum class Effect { elasticity, hourglass, damping, gravity, muscles, sliding, loads, contact };
+inline constexpr std::array<Effect, 8> kAllEffects = {
     Effect::elasticity, Effect::hourglass, Effect::damping, Effect::gravity,
-    Effect::muscles,    Effect::sliding,   Effect::loads};
+    Effect::muscles,    Effect::sliding,   Effect::loads,   Effect::contact};
 const char* to_string(Effect effect);
 
 struct SceneTimeStep {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -112,6 +113,30 @@ double incisal_opening(const JawMotion& jaw, double t) {
   const Vec3<double> x{jaw.incisal[0], jaw.incisal[1], jaw.incisal[2]};
   const Vec3<double> u = physics::jaw_displacement(map, x);
   return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+}
+
+std::optional<LipContact> lip_contact_of(const formats::Model& model) {
+  if (!model.jaw || model.jaw->lip_pairs.empty()) return std::nullopt;
+  const auto& f = model.jaw->forward;
+  const auto& a = model.jaw->axis;
+  LipContact c;
+  c.pairs = model.jaw->lip_pairs;
+  c.up = {f[1] * a[2] - f[2] * a[1], f[2] * a[0] - f[0] * a[2], f[0] * a[1] - f[1] * a[0]};
+  return c;
+}
+
+double smallest_lip_gap(const LipContact& contact, const formats::Model& model,
+                        const std::vector<double>& u) {
+  double gap = std::numeric_limits<double>::infinity();
+  for (const auto& [upper, lower] : contact.pairs) {
+    const auto pu = model.node_position(upper), pl = model.node_position(lower);
+    double g = 0;
+    for (std::size_t k = 0; k < 3; ++k)
+      g += (pu[k] + u[3 * std::size_t(upper) + k] - pl[k] - u[3 * std::size_t(lower) + k]) *
+           contact.up[k];
+    gap = std::min(gap, g);
+  }
+  return gap;
 }
 
 double max_incisal_opening(const Setup& setup, double dt, std::int64_t steps) {

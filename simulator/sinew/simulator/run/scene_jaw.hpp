@@ -65,4 +65,14 @@ double incisal_opening(const JawMotion& jaw, double t);
 // evenly spaced samples and every curve point), m; 0 without a jaw.
 double max_incisal_opening(const Setup& setup, double dt, std::int64_t steps);
 
+// The model's lips' pairs (its /jaw/lip_pairs) with the face's up (the jaw's forward × axis); none
+// when the model has no jaw or its jaw no pairs.
+std::optional<LipContact> lip_contact_of(const formats::Model& model);
+
+// The smallest gap across the lips' pairs, (x_upper − x_lower) · up with x = rest + u (m; u: N × 3
+// displacements, m): negative where a lip has passed through the other (with `contact` no more
+// than the partner's lag of one step, physics/lip_contact.hpp).
+double smallest_lip_gap(const LipContact& contact, const formats::Model& model,
+                        const std::vector<double>& u);
+
 }  // namespace sinew::simulator

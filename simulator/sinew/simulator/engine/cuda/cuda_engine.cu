@@ -125,6 +125,8 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
   prescribed_set_.upload(program.prescribed_set, stream_);
   prescribed_free_.allocate(program.prescribed_set.size());
   plane_normals_.upload(program.plane_normal, stream_);
+  contact_partner_.upload(program.contact_partner, stream_);
+  contact_share_.upload(program.contact_share, stream_);
   if (!a.surfaces.empty()) {
     std::vector<SlideSurface<T>> views;
     for (const auto& s : a.surfaces) {
@@ -197,7 +199,7 @@ CudaEngine<T>::CudaEngine(const formats::Model& model, const Setup& setup, Plan 
     fill_scalars(-1, 1, int(batch_));  // slot `batch_`: prescribed factors at t = 0
     Vec3<T>* u0 = buf_[0].get();
     const T* sc = scalars_.get() + scalars_per_slot_ * std::size_t(batch_);
-    if (con_node_.size()) launch_constraints(sc + muscles_, false, u0, u0, stream_, false);
+    if (con_node_.size()) launch_constraints(sc + muscles_, false, u0, u0, u0, stream_, false);
     SINEW_CUDA_CHECK(cudaStreamSynchronize(stream_));
     std::vector<Vec3<T>> u = download_vec(u0), up = u;
     for (const auto& v : setup.initial_velocities)

@@ -102,8 +102,9 @@ class CudaEngine final : public Backend, public CudaTiming {
   // ahead: the lists were refreshed from u(n) by slide_refresh_kernel (launch_step).
   // programmatic: a programmatic dependent launch (launch_kernel), as for the launches below.
   // lists_ready: no list refresh was forked for this step (constraint_kernel).
+  // u: u(n) (the lips' contact reads its partners there).
   void launch_constraints(const T* factor, bool loads, Vec3<T>* un, const Vec3<T>* up,
-                          cudaStream_t s, bool ahead, bool programmatic = false,
+                          const Vec3<T>* u, cudaStream_t s, bool ahead, bool programmatic = false,
                           bool lists_ready = false);
   // The sliding lists from u(n) for step n (anchors kept within s/2: slide_refresh_kernel).
   void launch_refresh(const Vec3<T>* u, cudaStream_t s);
@@ -250,6 +251,8 @@ class CudaEngine final : public Backend, public CudaTiming {
   DeviceArray<std::int32_t> node_op_offset_;  // N + 1 into con_op_ (program_in_node_)
   DeviceArray<std::int32_t> prescribed_set_, prescribed_mask_;
   DeviceArray<Vec3<T>> force_per_node_, prescribed_value_, prescribed_free_, plane_normals_;
+  DeviceArray<std::int32_t> contact_partner_;
+  DeviceArray<T> contact_share_;
   ConstraintData<T> constraint_data() const {
     return {con_node_.get(),
             con_offset_.get(),
@@ -267,7 +270,10 @@ class CudaEngine final : public Backend, public CudaTiming {
             rest_.get(),
             core_.setup().effects.gravity ? gravity_.get() : nullptr,
             std::int32_t(core_.prepared().forces.size()),
-            arrays_.constraints.jaw_factor};
+            arrays_.constraints.jaw_factor,
+            contact_partner_.get(),
+            contact_share_.get(),
+            arrays_.constraints.contact_up};
   }
   StepSums step_sums() const {
     return {work_ ? work_acc_.get() : nullptr,

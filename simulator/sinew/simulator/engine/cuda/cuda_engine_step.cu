@@ -17,10 +17,12 @@ namespace sinew::simulator::cuda {
 // lists_ready: no list refresh was forked for this step.
 template <typename T>
 void CudaEngine<T>::launch_constraints(const T* factor, bool loads, Vec3<T>* un, const Vec3<T>* up,
-                                       cudaStream_t s, bool ahead, bool programmatic,
-                                       bool lists_ready) {
+                                       const Vec3<T>* u, cudaStream_t s, bool ahead,
+                                       bool programmatic, bool lists_ready) {
   const unsigned g = blocks_for(con_node_.size());
-  const ConstraintData<T> d = constraint_data();
+  ConstraintData<T> d = constraint_data();
+  d.u_now = u;  // u(n), u(n−1): the lips' contact predicts the partner from them
+  d.u_prev = up;
   auto go = [&](auto kernel) {
     launch_kernel(kernel, g, kBlock, 0, s, programmatic, d, factor, loads, un, up, step_sums(),
                   lists_ready);
@@ -137,7 +139,7 @@ void CudaEngine<T>::launch_step(std::int64_t step, int slot, cudaStream_t s, boo
   }
   if (!program_in_node_ && con_node_.size()) {
     if (refresh) SINEW_CUDA_CHECK(cudaStreamWaitEvent(s, slide_done_, 0));  // join
-    launch_constraints(sc + muscles_, true, un, up, s, ahead, programmatic, !refresh);
+    launch_constraints(sc + muscles_, true, un, up, u, s, ahead, programmatic, !refresh);
     mark("loads, sliding, planes, prescribed, rigid + external work");
   }
 }
@@ -150,7 +152,9 @@ void CudaEngine<T>::launch_nodes(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* u
   NodeData<T> nd{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
                  std::int32_t(n_)};
   const StepSums sums = step_sums();
-  const ConstraintData<T> program = constraint_data();
+  ConstraintData<T> program = constraint_data();
+  program.u_now = u;
+  program.u_prev = up;
   auto node = [&](auto kernel) {
     launch_kernel(kernel, blocks_for(n_), kBlock, 0, s, programmatic, nd, elem_force_.get(),
                   f_sum_.get(), u, up, un, status_.get(), sums, program, node_op_offset_.get(),
@@ -177,7 +181,9 @@ void CudaEngine<T>::launch_tiles(const Vec3<T>* u, const Vec3<T>* up, Vec3<T>* u
   NodeData<T> nd{inverse_mass_.get(), gravity_.get(), inc_offset_.get(), inc_.get(), cd_,
                  std::int32_t(n_)};
   const StepSums sums = step_sums();
-  const ConstraintData<T> program = constraint_data();
+  ConstraintData<T> program = constraint_data();
+  program.u_now = u;
+  program.u_prev = up;
   const unsigned g = unsigned(tile_layers_.size());
   constexpr std::size_t bytes = tile_shared_bytes<T>();
   auto go = [&](auto kernel) {
