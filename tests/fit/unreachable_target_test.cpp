@@ -257,6 +257,28 @@ TEST_F(UnreachableTarget, MarkerCsvReportSaysTheSame) {
     }
 }
 
+TEST_F(UnreachableTarget, MarkersAndTargetsExcludeEachOther) {
+  auto both = options("bad_fit");
+  both.markers_path = (dir_ / "markers.csv").string();
+  auto neither = options("bad_fit");
+  neither.targets_path.clear();
+  for (const auto& [o, message] :
+       {std::pair{both,
+                  "--targets: give either markers (a CSV or a run's folder) or --targets, "
+                  "not both"},
+        std::pair{neither,
+                  "markers: nothing to fit: give markers (a CSV or a run's folder) or "
+                  "--targets"}}) {
+    try {
+      run_fit(o);
+      ADD_FAILURE() << "no error";
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()), message);
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "bad_fit"));
+  }
+}
+
 TEST_F(UnreachableTarget, BadTargetsLeaveNothingWritten) {
   // A mesh with a vertex more (another topology), a NaN coordinate, times not increasing.
   const std::string good = read(dir_ / "shape_1.obj");

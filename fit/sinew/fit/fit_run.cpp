@@ -217,7 +217,9 @@ void check_options(const FitOptions& o) {
   if (!(o.sample_interval >= 0) || !std::isfinite(o.sample_interval))
     throw bad("--sample-interval", fmt::format("must be ≥ 0 s, not {}", o.sample_interval));
   if (o.output_dir.empty()) throw bad("--output", "no output folder given");
-  if (o.markers_path.empty() == o.targets_path.empty())
+  if (o.markers_path.empty() && o.targets_path.empty())
+    throw bad("markers", "nothing to fit: give markers (a CSV or a run's folder) or --targets");
+  if (!o.markers_path.empty() && !o.targets_path.empty())
     throw bad("--targets", "give either markers (a CSV or a run's folder) or --targets, not both");
   if (o.target_markers < 0)
     throw bad("--target-markers", fmt::format("must be ≥ 0, not {}", o.target_markers));
