@@ -1,6 +1,8 @@
 // sinew-fit: per-frame muscle activations from marker trajectories (docs/fit.md).
 //
-//   sinew-fit SCENE MARKERS.csv -o OUTDIR [--muscles a,b,...] [--max-activation A]
+//   sinew-fit SCENE MARKERS.csv|RUN_FOLDER -o OUTDIR [options]
+//   sinew-fit SCENE --targets TARGETS.csv [--target-surface NAME] [--target-markers N] -o OUTDIR
+//             [--muscles a,b,...] [--max-activation A]
 //             [--knot-interval S] [--smoothing L] [--effort E] [--corrections N] [--step-activation A0]
 //             [--response-ramp S]
 //             [--marker-unit m|cm|mm] [--sample-interval S] [--cache DIR]
@@ -16,6 +18,7 @@
 #include <vector>
 
 #include "activation_plot.hpp"
+#include "residual_map.hpp"
 #include "sinew/common/log.hpp"
 #include "sinew/common/threads.hpp"
 #include "sinew/common/tool.hpp"
@@ -29,15 +32,23 @@ int main(int argc, char** argv) {
   threads::prefer_passive_wait(argv);
   CLI::App app{
       "sinew-fit: the rig's muscle activations per frame from marker trajectories "
-      "(docs/fit.md); writes a scene that replays them, the marker error per frame and a plot"};
+      "or target shapes (docs/fit.md); writes a scene that replays them, the marker error per "
+      "frame and per marker, a plot of the curves and a residual map on the skin"};
   fit::FitOptions o;
   std::string unit;
   bool quiet = false;
   app.add_option("scene", o.scene_path, "Base scene (YAML): model, effects, probes")
       ->required();
   app.add_option("markers", o.markers_path,
-                 "Marker CSV: time,NAME.x,NAME.y,NAME.z,... (docs/fit.md)")
-      ->required();
+                 "Marker CSV: time,NAME.x,NAME.y,NAME.z,... or a run's folder (docs/fit.md)");
+  app.add_option("--targets", o.targets_path,
+                 "Target shapes instead of markers: a CSV 'time,mesh' of OBJ meshes with the "
+                 "skin's topology (sinew-export's rest OBJ, sculpted), one per key time");
+  app.add_option("--target-surface", o.target_surface,
+                 "The visual surface the targets sculpt (default: the model's first)");
+  app.add_option("--target-markers", o.target_markers,
+                 "Target vertices sampled as markers, farthest-point (200; 0: every vertex)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("-o,--output", o.output_dir, "Output folder")->required();
   app.add_option("--muscles", o.muscles, "Muscles to fit (default: every muscle of the model)")
       ->delimiter(',');
@@ -81,6 +92,7 @@ int main(int argc, char** argv) {
   const int status = tool::run("sinew-fit", codes, [&] {
     const auto r = fit::run_fit(o, [](const std::string& dir, const fit::FitResult& result) {
       postprocess::write_png(dir + "/activations.png", fit::draw_activation_plot(result));
+      postprocess::write_png(dir + "/residual_map.png", fit::draw_residual_map(result));
     });
     log::info("sinew-fit: {} muscles, {} frames: marker RMS {:.3f} mm (max {:.3f} mm); {} "
               "response runs ({} reused) and {} forward runs in {:.1f} s -> {}",

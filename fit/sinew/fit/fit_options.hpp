@@ -2,6 +2,7 @@
 // What a caller asks of a fit (FitOptions: sinew-fit's options) and what it gets back (FitResult):
 // the arguments of run_fit (fit_run.hpp), also read by the report (fit_report.hpp). Apart from
 // fit_run.hpp so that the report, which the fit calls, does not include the fit.
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -13,6 +14,11 @@ struct FitOptions {
   // The marker CSV (markers.hpp), or a run's output folder: its probe_<name>.csv of every
   // displacement probe of the scene become the markers (rest position + displacement).
   std::string markers_path;
+  // Or (markers_path empty) a target manifest (target_shapes.hpp): sculpted meshes of a visual
+  // surface at key times, whose vertices become markers on their nearest nodes.
+  std::string targets_path;
+  std::string target_surface;  // the visual surface the targets sculpt ("": the model's first)
+  int target_markers = 200;    // vertices sampled as markers (farthest-point); 0: every vertex
   std::string output_dir;    // written as <output_dir>.tmp-<pid>, renamed at the end
   std::vector<std::string> muscles;  // the muscles fitted; empty: every muscle of the model
   double max_activation = 1;         // upper bound of every activation, (0, 1]
@@ -45,6 +51,19 @@ struct FitResult {
   double response_s = 0, forward_s = 0, solve_s = 0, total_s = 0;  // wall time
   std::int64_t steps_per_run = 0;
   std::string output_dir;                         // the final name
+
+  // Per marker (M, the markers' order), in the returned forward run: the residual
+  // |simulated − target| over the frames it was seen (mm; NaN when never seen), its rest
+  // position (the node's, m) and, for target shapes, its surface vertex (-1 otherwise).
+  std::vector<std::string> marker_names;
+  std::vector<std::array<double, 3>> marker_rest;
+  std::vector<std::int32_t> marker_vertex;
+  std::vector<double> marker_rms_mm, marker_max_mm;
+  // The frame with the largest marker RMS and every marker's residual there (mm; NaN unseen).
+  int worst_frame = -1;
+  std::vector<double> worst_frame_residual_mm;
+  std::string model_path;  // the base scene's model (absolute)
+  std::string surface;     // the visual surface of the targets ("" for marker input)
 };
 
 }  // namespace sinew::fit

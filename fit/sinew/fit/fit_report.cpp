@@ -16,10 +16,14 @@ MarkerErrors marker_errors(const Markers& markers, const std::vector<std::array<
   MarkerErrors e;
   double sum = 0;
   std::size_t count = 0;
+  const std::size_t markers_n = markers.marker_count();
+  std::vector<double> marker_sum(markers_n, 0.0), marker_max(markers_n, 0.0);
+  std::vector<std::size_t> marker_seen(markers_n, 0);
   for (std::size_t f = 0; f < markers.frame_count(); ++f) {
     double frame_sum = 0, frame_max = 0;
     std::size_t n = 0;
-    for (std::size_t m = 0; m < markers.marker_count(); ++m) {
+    e.distance_mm.emplace_back(markers_n, NAN);
+    for (std::size_t m = 0; m < markers_n; ++m) {
       if (!markers.seen[f][m]) continue;
       const auto u = simulated[m].at(markers.times[f]);
       double d2 = 0;
@@ -30,6 +34,10 @@ MarkerErrors marker_errors(const Markers& markers, const std::vector<std::array<
       frame_sum += d2;
       frame_max = std::max(frame_max, std::sqrt(d2));
       ++n;
+      e.distance_mm[f][m] = std::sqrt(d2);
+      marker_sum[m] += d2;
+      marker_max[m] = std::max(marker_max[m], std::sqrt(d2));
+      ++marker_seen[m];
     }
     e.frame_rms_mm.push_back(n ? std::sqrt(frame_sum / static_cast<double>(n)) : NAN);
     e.frame_max_mm.push_back(n ? frame_max : NAN);
@@ -38,6 +46,17 @@ MarkerErrors marker_errors(const Markers& markers, const std::vector<std::array<
     e.max_mm = std::max(e.max_mm, frame_max);
   }
   e.rms_mm = count ? std::sqrt(sum / static_cast<double>(count)) : 0;
+  for (std::size_t m = 0; m < markers_n; ++m) {
+    const bool seen = marker_seen[m] > 0;
+    e.marker_rms_mm.push_back(seen ? std::sqrt(marker_sum[m] / static_cast<double>(marker_seen[m]))
+                                   : NAN);
+    e.marker_max_mm.push_back(seen ? marker_max[m] : NAN);
+  }
+  for (std::size_t f = 0; f < e.frame_rms_mm.size(); ++f)
+    if (!std::isnan(e.frame_rms_mm[f]) &&
+        (e.worst_frame < 0 ||
+         e.frame_rms_mm[f] > e.frame_rms_mm[static_cast<std::size_t>(e.worst_frame)]))
+      e.worst_frame = static_cast<int>(f);
   return e;
 }
 
@@ -63,6 +82,19 @@ void write_fit_tables(const std::string& dir, const FitResult& r, const FitOptio
   }
   write_text_atomically((d / "marker_error.csv").string(), err);
 
+  // Per marker: where it is and how far the returned forward run left it from its target.
+  auto cell = [](double v) { return std::isnan(v) ? std::string() : fmt::format("{:.6f}", v); };
+  std::string res = "marker,vertex,x_mm,y_mm,z_mm,rms_mm,max_mm,worst_frame_mm\n";
+  for (std::size_t m = 0; m < r.marker_names.size(); ++m) {
+    res +=
+        fmt::format("{},{},{:.3f},{:.3f},{:.3f},{},{},{}\n", r.marker_names[m],
+                    r.marker_vertex[m] < 0 ? std::string() : std::to_string(r.marker_vertex[m]),
+                    1e3 * r.marker_rest[m][0], 1e3 * r.marker_rest[m][1], 1e3 * r.marker_rest[m][2],
+                    cell(r.marker_rms_mm[m]), cell(r.marker_max_mm[m]),
+                    cell(r.worst_frame_residual_mm.empty() ? NAN : r.worst_frame_residual_mm[m]));
+  }
+  write_text_atomically((d / "marker_residual.csv").string(), res);
+
   nlohmann::json j;
   j["scene"] = o.scene_path;
   j["markers"] = o.markers_path;
@@ -74,6 +106,33 @@ void write_fit_tables(const std::string& dir, const FitResult& r, const FitOptio
   j["marker_max_mm"] = r.max_mm;
   j["iteration_marker_rms_mm"] = r.iteration_rms_mm;
   j["best_iteration"] = r.best_iteration;
+  if (r.worst_frame >= 0) {
+    const auto f = static_cast<std::size_t>(r.worst_frame);
+    j["worst_frame"] = {
+        {"time_s", r.frame_times[f]}, {"rms_mm", r.frame_rms_mm[f]}, {"max_mm", r.frame_max_mm[f]}};
+  }
+  // The markers furthest from their targets (by RMS over their frames), largest first.
+  std::vector<std::size_t> order;
+  for (std::size_t m = 0; m < r.marker_names.size(); ++m)
+    if (!std::isnan(r.marker_rms_mm[m])) order.push_back(m);
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return r.marker_rms_mm[a] > r.marker_rms_mm[b]; });
+  nlohmann::json worst = nlohmann::json::array();
+  for (std::size_t i = 0; i < std::min<std::size_t>(10, order.size()); ++i) {
+    const auto m = order[i];
+    nlohmann::json w = {
+        {"marker", r.marker_names[m]},
+        {"rms_mm", r.marker_rms_mm[m]},
+        {"max_mm", r.marker_max_mm[m]},
+        {"rest_mm",
+         {1e3 * r.marker_rest[m][0], 1e3 * r.marker_rest[m][1], 1e3 * r.marker_rest[m][2]}}};
+    if (r.marker_vertex[m] >= 0) w["vertex"] = r.marker_vertex[m];
+    worst.push_back(w);
+  }
+  j["worst_markers"] = worst;
+  if (!o.targets_path.empty())
+    j["targets"] = {
+        {"manifest", o.targets_path}, {"surface", r.surface}, {"markers", r.marker_names.size()}};
   j["options"] = {{"max_activation", o.max_activation},
                   {"step_activation", o.step_activation},
                   {"response_ramp_s", o.response_ramp},

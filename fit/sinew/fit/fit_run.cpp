@@ -18,6 +18,7 @@
 #include "sinew/fit/fit_report.hpp"
 #include "sinew/fit/markers.hpp"
 #include "sinew/fit/response.hpp"
+#include "sinew/fit/target_shapes.hpp"
 #include "sinew/simulator/engine/model_cache.hpp"
 #include "sinew/simulator/run/runner.hpp"
 #include "sinew/simulator/run/scene.hpp"
@@ -80,9 +81,10 @@ struct SceneMaker {
   YamlNode doc;
   std::string model_path;  // absolute
   std::string file;        // the base scene, for messages
+  std::string probes;      // when not empty: the probes list, replaced (target nodes added)
 
   // The base scene with the model path absolute, the duration, the muscles' curves and (when not
-  // empty) the output section replaced.
+  // empty) the output section and the probes replaced.
   std::string text(double duration, const std::string& muscles,
                    const std::string& output) const {
     std::vector<YamlReplacement> r;
@@ -90,6 +92,7 @@ struct SceneMaker {
     r.push_back({"duration", parse_yaml(number(duration), file)});
     r.push_back({"muscles", parse_yaml(muscles, file)});
     if (!output.empty()) r.push_back({"output", parse_yaml(output, file)});
+    if (!probes.empty()) r.push_back({"probes", parse_yaml(probes, file)});
     return doc.replaced(r);
   }
 };
@@ -214,6 +217,39 @@ void check_options(const FitOptions& o) {
   if (!(o.sample_interval >= 0) || !std::isfinite(o.sample_interval))
     throw bad("--sample-interval", fmt::format("must be ≥ 0 s, not {}", o.sample_interval));
   if (o.output_dir.empty()) throw bad("--output", "no output folder given");
+  if (o.markers_path.empty() && o.targets_path.empty())
+    throw bad("markers", "nothing to fit: give markers (a CSV or a run's folder) or --targets");
+  if (!o.markers_path.empty() && !o.targets_path.empty())
+    throw bad("--targets", "give either markers (a CSV or a run's folder) or --targets, not both");
+  if (o.target_markers < 0)
+    throw bad("--target-markers", fmt::format("must be ≥ 0, not {}", o.target_markers));
+}
+
+// The visual surface the targets sculpt: by name, or the model's first.
+const formats::Surface& target_surface(const formats::Model& model, const std::string& name,
+                                       const std::string& model_path) {
+  std::string list;
+  for (const auto& s : model.surfaces) {
+    if (s.role != formats::SurfaceRole::visual) continue;
+    if (name.empty() || s.name == name) return s;
+    list += (list.empty() ? "" : ", ") + s.name;
+  }
+  if (name.empty())
+    throw ConfigError(model_path, "/surfaces",
+                      "the model has no visual surface for target shapes to sculpt");
+  throw ConfigError("", "--target-surface",
+                    fmt::format("the model has no visual surface '{}' (it has: {})", name,
+                                list.empty() ? "none" : list));
+}
+
+// The base scene's probes list with a displacement probe per target node appended.
+std::string probes_with(const YamlNode& doc, const TargetMarkers& t) {
+  std::string s = "[";
+  for (const auto& item : doc.child("probes").items()) s += item.emit() + ", ";
+  for (std::size_t p = 0; p < t.nodes.size(); ++p)
+    s += fmt::format("{}{{name: {}, type: displacement, node: {}}}", p ? ", " : "", t.probes[p],
+                     t.nodes[p]);
+  return s + "]";
 }
 
 }  // namespace
@@ -223,8 +259,11 @@ FitResult run_fit(const FitOptions& o,
   const auto start = Clock::now();
   check_options(o);
   const simulator::Scene scene = simulator::parse_scene(o.scene_path);
-  const bool from_probes = fs::is_directory(o.markers_path);
-  Markers markers = from_probes ? Markers{} : read_markers(o.markers_path);
+  const bool from_targets = !o.targets_path.empty();
+  const bool from_probes = !from_targets && fs::is_directory(o.markers_path);
+  const TargetManifest manifest =
+      from_targets ? read_target_manifest(o.targets_path) : TargetManifest{};
+  Markers markers = from_probes || from_targets ? Markers{} : read_markers(o.markers_path);
   if (!scene.has(simulator::Effect::muscles))
     throw ConfigError(o.scene_path, "effects",
                       "the base scene must list the 'muscles' effect: sinew-fit fits its "
@@ -245,8 +284,35 @@ FitResult run_fit(const FitOptions& o,
     }
   if (from_probes) markers = markers_from_probes(o.markers_path, resolved.probes, model,
                                                  scene.length_unit);
+  // Target shapes: every mesh checked against the surface, then the sampled vertices' markers,
+  // each read from probes on its element's nodes that the runs' scenes add.
+  TargetMarkers targets;
+  std::string surface_name;
+  if (from_targets) {
+    const auto& surface = target_surface(model, o.target_surface, scene.model_path);
+    surface_name = surface.name;
+    std::vector<ObjMesh> meshes;
+    for (const auto& path : manifest.meshes) {
+      meshes.push_back(read_obj_mesh(path));
+      check_target_topology(meshes.back(), surface);
+    }
+    targets = target_markers(manifest, meshes, model, surface,
+                             static_cast<std::size_t>(o.target_markers));
+    for (const auto& name : targets.probes)
+      if (probes.count(name))
+        throw ConfigError(
+            o.scene_path, "probes",
+            fmt::format("probe '{}' has the name of a target probe: rename it", name));
+    markers = targets.markers;
+  }
   std::vector<std::array<double, 3>> rest;
-  for (const auto& name : markers.names) {
+  if (from_targets) rest = targets.rest;
+  // The probes each run records, and the markers' paths from them.
+  const std::vector<std::string>& run_probes = from_targets ? targets.probes : markers.names;
+  auto paths_of = [&](std::vector<ProbePath> paths) {
+    return from_targets ? marker_paths(targets, paths) : paths;
+  };
+  for (const auto& name : from_targets ? std::vector<std::string>{} : markers.names) {
     const auto it = probes.find(name);
     if (it == probes.end())
       throw FormatError(markers.file,
@@ -281,8 +347,11 @@ FitResult run_fit(const FitOptions& o,
   if (result.muscles.empty())
     throw ConfigError(scene.model_path, "/muscles", "the model has no muscles to fit");
 
-  const double unit =
-      from_probes ? scene.length_unit : o.marker_unit > 0 ? o.marker_unit : scene.length_unit;
+  // Target meshes are in m (sinew-export writes m) unless --marker-unit says otherwise.
+  const double unit = from_probes         ? scene.length_unit
+                      : o.marker_unit > 0 ? o.marker_unit
+                      : from_targets      ? 1.0
+                                          : scene.length_unit;
   const double end_time = markers.times.back();
   if (!(end_time > 0))
     throw FormatError(markers.file, fmt::format("line {}", markers.lines.back()),
@@ -323,7 +392,10 @@ FitResult run_fit(const FitOptions& o,
   const fs::path response_root = o.cache_dir.empty() ? runs : fs::path(o.cache_dir);
 
   SceneMaker maker{parse_yaml(read_text_file(o.scene_path, "scene"), o.scene_path),
-                   fs::absolute(scene.model_path).lexically_normal().string(), o.scene_path};
+                   fs::absolute(scene.model_path).lexically_normal().string(),
+                   o.scene_path,
+                   {}};
+  if (from_targets) maker.probes = probes_with(maker.doc, targets);
 
   // 1. Response runs.
   const auto t_response = Clock::now();
@@ -333,12 +405,12 @@ FitResult run_fit(const FitOptions& o,
         end_time,
         muscles_yaml({muscle}, {{{0.0, 0.0}, {ramp, o.step_activation}}}), work_output);
     log::info("sinew-fit: response of {}", muscle);
-    auto run = forward(text, response_root / ("response_" + muscle), model_file->sha256,
-                       markers.names, o, models, !o.cache_dir.empty());
+    auto run = forward(text, response_root / ("response_" + muscle), model_file->sha256, run_probes,
+                       o, models, !o.cache_dir.empty());
     result.response_runs += 1;
     result.response_runs_reused += run.reused;
     if (!run.reused) result.steps_per_run = run.steps;
-    responses.push_back(std::move(run.paths));
+    responses.push_back(paths_of(std::move(run.paths)));
   }
   result.response_s = seconds_since(t_response);
 
@@ -374,8 +446,9 @@ FitResult run_fit(const FitOptions& o,
     const std::string text =
         maker.text(end_time, muscles_yaml(result.muscles, curves_of(x)), work_output);
     log::info("sinew-fit: forward run {} of {}", it + 1, o.corrections + 1);
-    const auto run = forward(text, runs / fmt::format("forward_{}", it), model_file->sha256,
-                             markers.names, o, models, false);
+    auto run = forward(text, runs / fmt::format("forward_{}", it), model_file->sha256, run_probes,
+                       o, models, false);
+    run.paths = paths_of(std::move(run.paths));
     result.forward_s += seconds_since(t_forward);
     result.forward_runs += 1;
     if (result.steps_per_run == 0) result.steps_per_run = run.steps;
@@ -414,11 +487,23 @@ FitResult run_fit(const FitOptions& o,
   result.frame_max_mm = best_errors.frame_max_mm;
   result.rms_mm = best_errors.rms_mm;
   result.max_mm = best_errors.max_mm;
+  result.marker_names = markers.names;
+  result.marker_rest = rest;
+  result.marker_vertex =
+      from_targets ? targets.vertices : std::vector<std::int32_t>(markers.names.size(), -1);
+  result.marker_rms_mm = best_errors.marker_rms_mm;
+  result.marker_max_mm = best_errors.marker_max_mm;
+  result.worst_frame = best_errors.worst_frame;
+  if (best_errors.worst_frame >= 0)
+    result.worst_frame_residual_mm =
+        best_errors.distance_mm[static_cast<std::size_t>(best_errors.worst_frame)];
+  result.model_path = maker.model_path;
+  result.surface = surface_name;
 
   // 3. Outputs: the scene that replays the fit (the base scene's own output section), the tables.
   write_text_atomically((tmp.path() / "fitted_scene.yaml").string(),
                         "# sinew-fit: " + o.scene_path + " with the activations fitted to " +
-                            o.markers_path + " (docs/fit.md)\n" +
+                            (from_targets ? o.targets_path : o.markers_path) + " (docs/fit.md)\n" +
                             maker.text(end_time, muscles_yaml(result.muscles, curves), ""));
   result.total_s = seconds_since(start);
   write_fit_tables(tmp.path().string(), result, o);

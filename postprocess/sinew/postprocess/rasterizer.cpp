@@ -336,7 +336,9 @@ Image render(const std::vector<float>& positions, const std::vector<std::int32_t
         if (o.coloring) {
           const auto& v = o.coloring->values;
           const double s = p0 * v[a] + p1 * v[b] + p2 * v[c];
-          base = map_color(o.coloring->map, range > 0 ? (s - o.coloring->min) / range : 0.0);
+          // A NaN value (no data at a corner) keeps the surface's own colour.
+          if (!std::isnan(s))
+            base = map_color(o.coloring->map, range > 0 ? (s - o.coloring->min) / range : 0.0);
         }
         const double diffuse = std::max(0.0, dot(n, light));
         const Point half = normalize(add(light, view));

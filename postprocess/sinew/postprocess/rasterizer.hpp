@@ -83,7 +83,7 @@ ColorMap parse_color_map(const std::string& text, const std::string& field = "--
 Rgb map_color(ColorMap map, double t);
 
 // A per-vertex scalar shown through a colour map: values[i] of vertex i; the map spans
-// [min, max]. The colour bar (on the right, when `bar`) is labelled with min × label_scale and
+// [min, max]. A triangle with a NaN value at a corner keeps Shading::base (no data there). The colour bar (on the right, when `bar`) is labelled with min × label_scale and
 // max × label_scale and `label` (e.g. values in m, label_scale 1000, label "mm").
 struct ScalarColoring {
   std::vector<float> values;
