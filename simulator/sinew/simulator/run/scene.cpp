@@ -339,7 +339,7 @@ Scene parse_scene_text(const std::string& text, const std::string& file,
   if (!c.has("effects")) {
     throw ConfigError(file, "effects",
                       "missing: list the effects to simulate (elasticity, hourglass, damping, "
-                      "gravity, muscles, sliding, loads)");
+                      "gravity, muscles, sliding, loads, contact)");
   }
   {
     const auto e = c.child("effects");
