@@ -192,10 +192,15 @@ std::vector<std::string> read_string_values(hid_t ds, std::size_t n, const std::
     H5Dvlen_reclaim(mem, space, H5P_DEFAULT, ptrs.data());
     return out;
   }
-  // Fixed-length: read with one more byte per value so every value ends in NUL.
+  // Fixed-length: read with one more byte per value so every value ends in NUL, in the stored
+  // character set (HDF5 has no conversion between ASCII and UTF-8: a UTF-8 dataset read as ASCII
+  // fails; ASCII is UTF-8, so the bytes are the same either way). Space padding (Fortran's) is
+  // turned into NUL termination by HDF5's conversion.
   const std::size_t size = H5Tget_size(type);
   Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
   H5Tset_size(mem, size + 1);
+  const H5T_cset_t cset = H5Tget_cset(type);
+  if (cset == H5T_CSET_UTF8) H5Tset_cset(mem, H5T_CSET_UTF8);
   auto buf = allocate<char>(n * (size + 1), file, name);
   if (H5Dread(ds, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0) {
     throw format_fail(file, name, "cannot read");

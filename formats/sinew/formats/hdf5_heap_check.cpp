@@ -233,8 +233,10 @@ void check_vlen_dataset(hid_t dataset, const std::string& file, const std::strin
   Handle dcpl(H5Dget_create_plist(dataset), H5Pclose);
   if (!dcpl.valid() || H5Pget_layout(dcpl) != H5D_CONTIGUOUS) {
     throw FormatError(file, name,
-                      "variable-length strings must be stored contiguous (sinew checks their heap "
-                      "references before reading, which only that layout allows)");
+                      "variable-length strings must be stored contiguous, not chunked, compressed "
+                      "or compact (sinew checks their heap references before reading, which only "
+                      "that layout allows): store this dataset contiguous (h5repack -l " +
+                          name + ":CONTI) or as fixed-length strings");
   }
   Handle space(H5Dget_space(dataset), H5Sclose);
   const auto count = H5Sget_simple_extent_npoints(space);

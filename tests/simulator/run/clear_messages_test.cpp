@@ -71,6 +71,22 @@ TEST(ClearMessages, AMissingModelNamesTheSceneAndItsModelKey) {
   }
 }
 
+TEST(ClearMessages, AModelPathTooLongNamesTheSceneAndItsModelKey) {
+  // 5,000 characters: the system refuses the name ("File name too long"); the message says which
+  // file and key gave it (issue 33: it was a bare filesystem error).
+  TempDir dir("long_model");
+  write_file(dir / "scene.yaml",
+             "model: " + std::string(5000, 'a') + ".h5\neffects: [elasticity]\nduration: 1\n");
+  try {
+    run_scene(options_for(dir / "scene.yaml", dir / "out"));
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.file(), dir / "scene.yaml");
+    EXPECT_EQ(e.field(), "model");
+    EXPECT_TRUE(contains(e.what(), "5003 characters")) << e.what();
+  }
+}
+
 TEST(ClearMessages, AVoxelSizeOrMassScalingOutOfScaleIsNamed) {
   TempDir dir("out_of_scale");
   formats::write_model(testing::small_box(false, false, 2, 2, 2, 1e300), dir / "huge.h5");

@@ -111,7 +111,14 @@ LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>&
   r.scene = parse_scene_text(r.scene_text, options.scene_path,
                              fs::path(options.scene_path).parent_path().string());
   const Scene& scene = r.scene;
-  if (!fs::exists(scene.model_path)) {
+  std::error_code ec;  // a name the system refuses (too long, a loop of links) is named here
+  const bool model_exists = fs::exists(scene.model_path, ec);
+  if (ec) {
+    throw ConfigError(options.scene_path, "model",
+                      fmt::format("cannot look up the model file ({} characters: '{:.60}...'): {}",
+                                  scene.model.size(), scene.model, ec.message()));
+  }
+  if (!model_exists) {
     throw ConfigError(options.scene_path, "model",
                       fmt::format("the model file '{}' does not exist (model: {}, relative to the "
                                   "scene's folder)",
