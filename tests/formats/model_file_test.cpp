@@ -548,75 +548,60 @@ TEST_F(BrokenFile, NamedSetOutOfRange) {
   EXPECT_CONTAINS(read_error(path_), "/node_sets/x_max[0]: node id 80 out of range [0, 80)");
 }
 
+// Replaces the model's two material names with a dataset of string type `t` written from `data`
+// (dataset creation properties `dcpl`), as other tools may store them.
+void replace_material_names(const std::string& path, hid_t t, const void* data,
+                            hid_t dcpl = H5P_DEFAULT) {
+  H5File f(path);
+  ASSERT_GE(H5Ldelete(f.id(), "/materials/name", H5P_DEFAULT), 0);
+  const hsize_t n = 2;
+  const hid_t space = H5Screate_simple(1, &n, nullptr);
+  const hid_t ds = H5Dcreate2(f.id(), "/materials/name", t, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  ASSERT_GE(H5Dwrite(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), 0);
+  H5Dclose(ds);
+  H5Sclose(space);
+}
+
 TEST_F(BrokenFile, FixedLengthStringsAreReadToo) {
   // Other tools may write fixed-length strings; they read back the same.
-  {
-    H5File f(path_);
-    ASSERT_GE(H5Ldelete(f.id(), "/materials/name", H5P_DEFAULT), 0);
-    const hid_t t = H5Tcopy(H5T_C_S1);
-    H5Tset_size(t, 16);
-    const hsize_t n = 2;
-    const hid_t space = H5Screate_simple(1, &n, nullptr);
-    const hid_t ds =
-        H5Dcreate2(f.id(), "/materials/name", t, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    char names[2][16] = {"fat", "muscle_tissue"};
-    ASSERT_GE(H5Dwrite(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names), 0);
-    H5Dclose(ds);
-    H5Sclose(space);
-    H5Tclose(t);
-  }
+  const hid_t t = H5Tcopy(H5T_C_S1);
+  H5Tset_size(t, 16);
+  char names[2][16] = {"fat", "muscle_tissue"};
+  replace_material_names(path_, t, names);
+  H5Tclose(t);
   EXPECT_TRUE(read_model(path_) == model_);
 }
 
 TEST_F(BrokenFile, FixedLengthUtf8AndSpacePaddedStringsAreReadToo) {
   // Fixed-length strings in UTF-8 (h5py's numpy bytes with cset UTF-8, MATLAB) and space-padded
   // (Fortran's convention) read back the same (issue 33: UTF-8 had no conversion path to ASCII).
-  {
-    H5File f(path_);
-    ASSERT_GE(H5Ldelete(f.id(), "/materials/name", H5P_DEFAULT), 0);
-    const hid_t t = H5Tcopy(H5T_C_S1);
-    H5Tset_size(t, 16);
-    H5Tset_cset(t, H5T_CSET_UTF8);
-    H5Tset_strpad(t, H5T_STR_SPACEPAD);
-    const hsize_t n = 2;
-    const hid_t space = H5Screate_simple(1, &n, nullptr);
-    const hid_t ds =
-        H5Dcreate2(f.id(), "/materials/name", t, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    char names[2][16];
-    std::memset(names, ' ', sizeof names);
-    std::memcpy(names[0], "fat", 3);
-    std::memcpy(names[1], "muscle_tissue", 13);
-    ASSERT_GE(H5Dwrite(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names), 0);
-    H5Dclose(ds);
-    H5Sclose(space);
-    H5Tclose(t);
-  }
+  const hid_t t = H5Tcopy(H5T_C_S1);
+  H5Tset_size(t, 16);
+  H5Tset_cset(t, H5T_CSET_UTF8);
+  H5Tset_strpad(t, H5T_STR_SPACEPAD);
+  char names[2][16];
+  std::memset(names, ' ', sizeof names);
+  std::memcpy(names[0], "fat", 3);
+  std::memcpy(names[1], "muscle_tissue", 13);
+  replace_material_names(path_, t, names);
+  H5Tclose(t);
   EXPECT_TRUE(read_model(path_) == model_);
 }
 
 TEST_F(BrokenFile, CompressedVariableLengthStringsAreRefusedWithTheLayoutToUse) {
   // gzip needs chunks; sinew checks a variable-length string's heap reference before HDF5 follows
   // it, which only the contiguous layout allows: the message says which layout to use.
-  {
-    H5File f(path_);
-    ASSERT_GE(H5Ldelete(f.id(), "/materials/name", H5P_DEFAULT), 0);
-    const hid_t t = H5Tcopy(H5T_C_S1);
-    H5Tset_size(t, H5T_VARIABLE);
-    H5Tset_cset(t, H5T_CSET_UTF8);
-    const hsize_t n = 2, chunk = 2;
-    const hid_t space = H5Screate_simple(1, &n, nullptr);
-    const hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
-    H5Pset_chunk(plist, 1, &chunk);
-    H5Pset_deflate(plist, 6);
-    const hid_t ds =
-        H5Dcreate2(f.id(), "/materials/name", t, space, H5P_DEFAULT, plist, H5P_DEFAULT);
-    const char* names[2] = {"fat", "muscle_tissue"};
-    ASSERT_GE(H5Dwrite(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names), 0);
-    H5Dclose(ds);
-    H5Pclose(plist);
-    H5Sclose(space);
-    H5Tclose(t);
-  }
+  const hid_t t = H5Tcopy(H5T_C_S1);
+  H5Tset_size(t, H5T_VARIABLE);
+  H5Tset_cset(t, H5T_CSET_UTF8);
+  const hsize_t chunk = 2;
+  const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(dcpl, 1, &chunk);
+  H5Pset_deflate(dcpl, 6);
+  const char* names[2] = {"fat", "muscle_tissue"};
+  replace_material_names(path_, t, names, dcpl);
+  H5Pclose(dcpl);
+  H5Tclose(t);
   EXPECT_CONTAINS(read_error(path_),
                   "/materials/name: variable-length strings must be stored contiguous");
   EXPECT_CONTAINS(read_error(path_), "h5repack -l /materials/name:CONTI");

@@ -58,33 +58,30 @@ TEST(ClearMessages, AFileOfTheWrongKindSaysWhatItIs) {
   EXPECT_TRUE(contains(msg, "this is a sinew results file, not a sinew model file")) << msg;
 }
 
-TEST(ClearMessages, AMissingModelNamesTheSceneAndItsModelKey) {
-  TempDir dir("missing_model");
-  write_file(dir / "scene.yaml", "model: gone.h5\neffects: [elasticity]\nduration: 1\n");
+// Runs a scene whose model key is `model` and expects a ConfigError naming the scene and its
+// `model` key, with `part` in the message.
+void expect_model_key_error(const std::string& dir_name, const std::string& model,
+                            const std::string& part) {
+  TempDir dir(dir_name);
+  write_file(dir / "scene.yaml", "model: " + model + "\neffects: [elasticity]\nduration: 1\n");
   try {
     run_scene(options_for(dir / "scene.yaml", dir / "out"));
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_EQ(e.file(), dir / "scene.yaml");
     EXPECT_EQ(e.field(), "model");
-    EXPECT_TRUE(contains(e.what(), "gone.h5")) << e.what();
+    EXPECT_TRUE(contains(e.what(), part)) << e.what();
   }
+}
+
+TEST(ClearMessages, AMissingModelNamesTheSceneAndItsModelKey) {
+  expect_model_key_error("missing_model", "gone.h5", "gone.h5");
 }
 
 TEST(ClearMessages, AModelPathTooLongNamesTheSceneAndItsModelKey) {
   // 5,000 characters: the system refuses the name ("File name too long"); the message says which
   // file and key gave it (issue 33: it was a bare filesystem error).
-  TempDir dir("long_model");
-  write_file(dir / "scene.yaml",
-             "model: " + std::string(5000, 'a') + ".h5\neffects: [elasticity]\nduration: 1\n");
-  try {
-    run_scene(options_for(dir / "scene.yaml", dir / "out"));
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_EQ(e.file(), dir / "scene.yaml");
-    EXPECT_EQ(e.field(), "model");
-    EXPECT_TRUE(contains(e.what(), "5003 characters")) << e.what();
-  }
+  expect_model_key_error("long_model", std::string(5000, 'a') + ".h5", "5003 characters");
 }
 
 TEST(ClearMessages, AVoxelSizeOrMassScalingOutOfScaleIsNamed) {
