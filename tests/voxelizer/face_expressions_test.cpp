@@ -25,6 +25,7 @@
 #include "sinew/simulator/engine/cuda_backend.hpp"
 #include "sinew/simulator/run/runner.hpp"
 #include "sinew/voxelizer/head.hpp"
+#include "sinew/voxelizer/landmarks.hpp"
 #include "sinew/voxelizer/spec.hpp"
 #include "sinew/voxelizer/voxelize.hpp"
 
@@ -196,6 +197,63 @@ std::pair<double, double> mirror_error(const ExpressionRun& r) {
   return {err, umax};
 }
 
+// The skin's displacement at the last frame at its vertex nearest `point` (the scenes' probes are
+// the sample head's points; on the scan the landmarks say where), m.
+Vec3d skin_displacement(const ExpressionRun& r, const Vec3d& point) {
+  const auto s = postprocess::read_surface((r.dir / "results.h5").string(), "skin");
+  std::size_t best = 0;
+  double d_best = 1e30;
+  for (std::size_t v = 0; v < s.vertex_count(); ++v) {
+    const Vec3d p{s.rest[3 * v], s.rest[3 * v + 1], s.rest[3 * v + 2]};
+    if (norm(p - point) < d_best) d_best = norm(p - point), best = v;
+  }
+  const auto& last = s.frames.back();
+  return {last[3 * best] - s.rest[3 * best], last[3 * best + 1] - s.rest[3 * best + 1],
+          last[3 * best + 2] - s.rest[3 * best + 2]};
+}
+
+// The C-line (Cotofana et al., Plast Reconstr Surg: in a maximal brow raise the lower forehead
+// moves up and the upper forehead down, meeting at 60.9 ± 10.2% (men), 60.6 ± 9.6% (women) of the
+// forehead's height): up the skin over the left frontalis's middle (the frontmost skin vertices
+// within 2.5 mm of the left brow's centre across, in 3 mm bands of height from the brow to 15 mm
+// above the hairline; y is up, z forward on both heads), where the bands' mean rise at the last
+// frame turns into a descent, as a share of the height from the brow to the hairline. NaN when it
+// does not turn.
+double c_line_share(const ExpressionRun& r, const Vec3d& brow, const Vec3d& hairline) {
+  const auto s = postprocess::read_surface((r.dir / "results.h5").string(), "skin");
+  const auto& last = s.frames.back();
+  const double band = 3e-3, top = hairline[1] + 15e-3;
+  const int bands = static_cast<int>(std::ceil((top - brow[1]) / band));
+  std::vector<double> front(static_cast<std::size_t>(bands), -1e9);
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<double> sum(front.size(), 0), count(front.size(), 0);
+    for (std::size_t v = 0; v < s.vertex_count(); ++v) {
+      const double x = s.rest[3 * v], y = s.rest[3 * v + 1], z = s.rest[3 * v + 2];
+      if (std::abs(x - brow[0]) > 2.5e-3 || y < brow[1] || y >= top) continue;
+      const auto b = static_cast<std::size_t>((y - brow[1]) / band);
+      if (pass == 0) {
+        front[b] = std::max(front[b], z);
+      } else if (z > front[b] - band) {  // the forehead's skin, not the back of the head
+        sum[b] += last[3 * v + 1] - s.rest[3 * v + 1];
+        count[b] += 1;
+      }
+    }
+    if (pass == 0) continue;
+    double prev_y = 0, prev_u = 0;
+    bool have = false;
+    for (std::size_t b = 0; b < front.size(); ++b) {
+      if (count[b] == 0) continue;
+      const double y = brow[1] + (b + 0.5) * band, u = sum[b] / count[b];
+      if (have && prev_u > 0 && u <= 0) {
+        const double cross = prev_y + (y - prev_y) * prev_u / (prev_u - u);
+        return (cross - brow[1]) / (hairline[1] - brow[1]);
+      }
+      prev_y = y, prev_u = u, have = true;
+    }
+  }
+  return std::nan("");
+}
+
 // Expected motion per expression, in mm (x the subject's left, y up, z forward out of the face).
 void expect_motion(const std::string& name, const ExpressionRun& r) {
   auto u = [&](const char* probe) { return probe_mm(r, probe); };
@@ -212,18 +270,16 @@ void expect_motion(const std::string& name, const ExpressionRun& r) {
     EXPECT_GT(u("brow_centre_left").y, 1.5);
     EXPECT_GT(u("brow_centre_right").y, 1.5);
     EXPECT_LT(std::abs(u("mouth_corner_left").y), 0.1);  // the mouth stays
-    // The C-line (Cotofana et al.): up the frontalis's middle the lower forehead rises and the
-    // upper forehead comes down. At 4 mm, 0.1 s: forehead_31 … _54 up 0.8–2.9 mm, _57 … _71
-    // down 0.8–4.6 mm; the sign changes at y ≈ 55 mm, 71% of the way from the brow (31.8 mm) to
-    // the hairline (64.3 mm); Cotofana's 61% would be at 51.6 mm.
+    // Up the frontalis's middle the forehead rises, less towards the top: the frontalis reaches
+    // into the galea's anchor (the spec's held scalp, y > 75 mm) 12 mm above the hairline's
+    // height, and the sample head's forehead (32.5 mm from the brow to the hairline, about half an
+    // adult's) is too short for the upper part to come down as well (the C-line: checked on the
+    // scan, below; docs/faces.md).
     for (const char* p : {"forehead_31", "forehead_39", "forehead_46", "forehead_50"}) {
       SCOPED_TRACE(p);
-      EXPECT_GT(u(p).y, 0.5);
+      EXPECT_GT(u(p).y, 0.5 * u("brow_centre_left").y);
     }
-    for (const char* p : {"forehead_57", "forehead_61", "forehead_64", "forehead_68"}) {
-      SCOPED_TRACE(p);
-      EXPECT_LT(u(p).y, -1.0);
-    }
+    EXPECT_LT(u("forehead_68").y, 0.5 * u("brow_centre_left").y);
   } else if (name == "frown") {
     // The inner brows move towards the midline.
     EXPECT_LT(u("brow_inner_left").x, -0.5);
@@ -411,6 +467,22 @@ TEST_P(FaceExpressionScan, EveryExpressionRunsWithNoInversion) {
     const ExpressionRun& r = run(name, GetParam(), "lee_perry_smith_4mm");
     EXPECT_EQ(r.summary.status, "completed");
     EXPECT_EQ(r.summary.steps_done, r.summary.steps_planned);
+  }
+  // The brow raise on a forehead of an adult's height (61 mm from the brow to the hairline; the
+  // sample head's is 32.5): the brows rise as far as people raise theirs (7.6–9.0 mm, Cruz & Cruz
+  // 2004, less the 1.5 mm people repeat an expression to) and the forehead's skin turns from
+  // rising to descending within Cotofana's spread (61 ± 10% of the forehead's height). At 4 mm,
+  // 0.1 s, CPU: the brows 7.8 and 9.9 mm, the turn at 64%.
+  const Landmarks marks = read_landmarks(kSource / "data/landmarks/lee_perry_smith.yaml");
+  const ExpressionRun& brow = run("brow_raise", GetParam(), "lee_perry_smith_4mm");
+  const double share =
+      c_line_share(brow, marks.points.at("brow_centre_left"), marks.points.at("hairline"));
+  std::cout << "the scan's C-line on " << GetParam() << ": " << 100 * share << "%\n";
+  EXPECT_GT(share, 0.51);
+  EXPECT_LT(share, 0.71);
+  for (const char* landmark : {"brow_centre_left", "brow_centre_right"}) {
+    SCOPED_TRACE(landmark);
+    EXPECT_GT(1e3 * skin_displacement(brow, marks.points.at(landmark))[1], 7.6 - 1.5);
   }
 }
 

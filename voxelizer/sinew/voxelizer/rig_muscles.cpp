@@ -66,8 +66,12 @@ RigRecipe recipe(const FaceFrame& f, const std::string& base, bool left) {
     const Vec3d brow = f.side("brow_centre", left);
     const double rise = dot(f.at("hairline") - f.at("glabella"), up);
     const double width = 1.5 * norm(brow - f.at("glabella")) / kMm;  // mm
-    return sheet(name, brow + (rise + 12 * kMm) * up, brow + 4 * kMm * up, width, width, 3.5, 3.5,
-                 1.2);
+    // Up the forehead's slope (glabella to hairline), not straight up: the skin curves back, and a
+    // chord straight up would end in front of the skin, its closest skin points crowded below the
+    // hairline.
+    const Vec3d slope = (1.0 / rise) * (f.at("hairline") - f.at("glabella"));
+    return sheet(name, brow + (rise + 12 * kMm) * slope, brow + 4 * kMm * up, width, width, 3.5,
+                 3.5, 1.2);
   }
   if (base == "corrugator") {
     // From the medial brow ridge (deep) up and out into the skin above the brow's middle.
@@ -95,8 +99,10 @@ RigRecipe recipe(const FaceFrame& f, const std::string& base, bool left) {
     return sheet(name, o, i, 12, 9, 5.5, 3.5, 1.8);
   }
   if (base == "risorius") {
-    // From the fascia over the parotid (towards the ear) to the modiolus; superficial.
-    const Vec3d o = lerp(mouth_corner, f.side("tragus", left), 0.55);
+    // From the fascia over the parotid (towards the ear) to the modiolus; superficial. It runs
+    // horizontally (Gray's), at the mouth's corner's height: the tragus lies level with the eyes.
+    const Vec3d towards_ear = f.side("tragus", left) - mouth_corner;
+    const Vec3d o = mouth_corner + 0.55 * (towards_ear - dot(towards_ear, up) * up);
     return sheet(name, o, modiolus, 8, 6, 3.0, 3.0, 1.0);
   }
   if (base == "depressor_anguli_oris") {
