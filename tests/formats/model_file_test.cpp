@@ -607,6 +607,63 @@ TEST_F(BrokenFile, CompressedVariableLengthStringsAreRefusedWithTheLayoutToUse) 
   EXPECT_CONTAINS(read_error(path_), "h5repack -l /materials/name:CONTI");
 }
 
+// Data in other files (issue 33: a damaged model crashed sinew-inspect named by a relative path
+// from another folder and not by its absolute path: HDF5 follows links to other files and
+// external storage relative to the working folder). A model holds its data itself: an external
+// link, external raw storage and a virtual dataset mapping another file are refused by name,
+// before HDF5 opens anything they point at (the other files here do not exist).
+TEST_F(BrokenFile, DataInOtherFilesIsRefusedBeforeItIsOpened) {
+  const hsize_t three = 3;
+  auto recreate = [&](hid_t dcpl) {
+    H5File f(path_);
+    ASSERT_GE(H5Ldelete(f.id(), "/grid/origin", H5P_DEFAULT), 0);
+    const hid_t space = H5Screate_simple(1, &three, nullptr);
+    const hid_t ds = H5Dcreate2(f.id(), "/grid/origin", H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl,
+                                H5P_DEFAULT);
+    ASSERT_GE(ds, 0);
+    H5Dclose(ds);
+    H5Sclose(space);
+  };
+  const std::string path = path_;
+  {
+    SCOPED_TRACE("external link");
+    {
+      H5File f(path);
+      ASSERT_GE(H5Ldelete(f.id(), "/grid/origin", H5P_DEFAULT), 0);
+      ASSERT_GE(H5Lcreate_external("elsewhere.h5", "/origin", f.id(), "/grid/origin",
+                                   H5P_DEFAULT, H5P_DEFAULT),
+                0);
+    }
+    const std::string e = read_error(path);
+    EXPECT_CONTAINS(e, "/grid/origin: a link to another file");
+    EXPECT_CONTAINS(e, "h5copy -f ext");
+  }
+  write_model(model_, path_);
+  {
+    SCOPED_TRACE("external raw storage");
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    ASSERT_GE(H5Pset_external(dcpl, "origin.raw", 0, 3 * sizeof(double)), 0);
+    recreate(dcpl);
+    H5Pclose(dcpl);
+    const std::string e = read_error(path);
+    EXPECT_CONTAINS(e, "/grid/origin: stored in external raw files");
+    EXPECT_CONTAINS(e, "h5repack -l /grid/origin:CONTI");
+  }
+  write_model(model_, path_);
+  {
+    SCOPED_TRACE("virtual dataset");
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    const hid_t space = H5Screate_simple(1, &three, nullptr);
+    ASSERT_GE(H5Pset_virtual(dcpl, space, "elsewhere.h5", "/origin", space), 0);
+    recreate(dcpl);
+    H5Sclose(space);
+    H5Pclose(dcpl);
+    const std::string e = read_error(path);
+    EXPECT_CONTAINS(e, "/grid/origin: a virtual dataset mapping values from other files");
+    EXPECT_CONTAINS(e, "h5repack -l /grid/origin:CONTI");
+  }
+}
+
 TEST_F(BrokenFile, UnknownSurfaceRole) {
   {
     H5File f(path_);

@@ -125,6 +125,53 @@ std::vector<hsize_t> dims_of(hid_t dataset, const std::string& file, const std::
   return dims;
 }
 
+// The schemas keep every value in the one file. A link to another file, a virtual dataset (its
+// values mapped from other files) or external raw storage would make what is read depend on files
+// found relative to the working folder, which HDF5 opens as it follows them (a damaged model of a
+// fuzz campaign crashed sinew-inspect named by a relative path and not by its absolute one). Each
+// is refused before anything is read through it, naming how to bring the data in.
+void refuse_external_links(hid_t loc, const std::string& name, const std::string& file) {
+  std::size_t pos = 0;
+  while (true) {
+    pos = name.find('/', pos + 1);
+    const auto part = name.substr(0, pos);
+    if (!part.empty() && part != "/") {
+      H5L_info_t info;
+      if (H5Lget_info(loc, part.c_str(), &info, H5P_DEFAULT) >= 0 &&
+          info.type != H5L_TYPE_HARD && info.type != H5L_TYPE_SOFT) {
+        throw FormatError(file, part,
+                          "a link to another file (or of a user-defined kind): the file must "
+                          "hold its data itself (h5copy -f ext copies the linked object in)");
+      }
+      H5Eclear2(H5E_DEFAULT);
+    }
+    if (pos == std::string::npos) return;
+  }
+}
+
+void refuse_other_storage(hid_t ds, const std::string& name, const std::string& file) {
+  Handle dcpl(H5Dget_create_plist(ds), H5Pclose);
+  if (!dcpl.valid()) return;
+  if (H5Pget_layout(dcpl) == H5D_VIRTUAL) {
+    // A view of this file's own data ("." as the source, the results' /frame_views) is fine.
+    size_t mappings = 0;
+    if (H5Pget_virtual_count(dcpl, &mappings) < 0) mappings = 1;
+    for (size_t i = 0; i < mappings; ++i) {
+      char source[2] = {0, 0};
+      const ssize_t len = H5Pget_virtual_filename(dcpl, i, source, sizeof source);
+      if (len == 1 && source[0] == '.') continue;
+      throw FormatError(file, name,
+                        "a virtual dataset mapping values from other files: store it in this "
+                        "file (h5repack -l " + name + ":CONTI)");
+    }
+  }
+  if (H5Pget_external_count(dcpl) > 0) {
+    throw FormatError(file, name,
+                      "stored in external raw files: store it in this file (h5repack -l " + name +
+                          ":CONTI)");
+  }
+}
+
 // Allocates n values, reporting a count too large for memory (a corrupt shape) as FormatError.
 template <typename T>
 std::vector<T> allocate(hsize_t n, const std::string& file, const std::string& name) {
@@ -144,8 +191,10 @@ template <typename T>
 Handle open_typed(hid_t loc, const std::string& name, const std::string& file, H5T_class_t cls,
                   const char* dtype) {
   if (!exists(loc, name)) throw FormatError(file, name, "missing dataset");
+  refuse_external_links(loc, name, file);
   Handle ds(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
   if (!ds.valid()) throw format_fail(file, name, "cannot open, not a dataset");
+  refuse_other_storage(ds, name, file);
   Handle type(H5Dget_type(ds), H5Tclose);
   bool ok = type.valid() && H5Tget_class(type) == cls;
   if (ok && cls != H5T_STRING) ok = H5Tget_size(type) == sizeof(T);
@@ -345,6 +394,7 @@ Handle create_group(hid_t loc, const std::string& name, const std::string& file,
 Handle open_group(hid_t loc, const std::string& name, const std::string& file) {
   const LibraryLock lock;
   if (!exists(loc, name)) throw FormatError(file, name, "missing group");
+  refuse_external_links(loc, name, file);
   Handle g(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), H5Gclose);
   if (!g.valid()) throw format_fail(file, name, "cannot open, not a group");
   return g;
@@ -431,8 +481,10 @@ void write_string(hid_t loc, const std::string& name, const std::string& value,
 Handle open_dataset(hid_t loc, const std::string& name, const std::string& file) {
   const LibraryLock lock;
   if (!exists(loc, name)) throw FormatError(file, name, "missing dataset");
+  refuse_external_links(loc, name, file);
   Handle ds(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
   if (!ds.valid()) throw format_fail(file, name, "cannot open, not a dataset");
+  refuse_other_storage(ds, name, file);
   // A compact dataset keeps its values in its header's layout message, whose size no checksum
   // ties to the dataspace in an old-format header: HDF5 1.10 copies the dataspace's worth of bytes
   // whatever the message holds (a fuzz case read past an 8-byte block under valgrind, and the heap
