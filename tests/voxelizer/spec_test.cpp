@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <string>
 
 #include "pipeline_test_util.hpp"
@@ -177,6 +179,44 @@ TEST(Spec, RangeAndTypeErrors) {
   layer.replace(layer.find("{material: dermis, thickness: 1.8}"), 34, "{material: dermis}");
   EXPECT_NE(config_error(layer).find("only the last layer may omit it"), std::string::npos);
   EXPECT_NE(config_error("units: [").find("YAML syntax error"), std::string::npos);
+}
+
+// Issue 33's vague errors, each now named against its spec key: an overflowing fibre direction
+// (its length overflowed to inf, and the zero direction it gave was reported against the output
+// file) is a direction like any other; a duplicated visual name; a passive curve whose slope
+// overflows, or a negative p1.
+TEST(Spec, FibreOverflowVisualNamesAndPassiveCurveAreCheckedAtTheirKeys) {
+  const std::string muscle = R"(
+muscles:
+  - name: m
+    mesh: m.obj
+    material: muscle
+    PASSIVE
+    fibres: {type: constant, direction: [1e308, 1e308, 0]}
+)";
+  auto with = [&](const std::string& passive, const std::string& extra = "") {
+    std::string t = std::string(kMinimal) + muscle + extra;
+    t.replace(t.find("PASSIVE"), 7, passive);
+    return t;
+  };
+  const Spec spec = parse_spec(with("optimal_stretch: 1"), "/specs/test.yaml");
+  ASSERT_EQ(spec.muscles.size(), 1u);
+  EXPECT_NEAR(spec.muscles[0].fibres.direction[0], std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(spec.muscles[0].fibres.direction[1], std::sqrt(0.5), 1e-15);
+  EXPECT_EQ(spec.muscles[0].fibres.direction[2], 0.0);
+
+  const std::string overflow = config_error(with("passive: {p1: 1e300, p2: 1000}"));
+  EXPECT_NE(overflow.find("muscles[0].passive"), std::string::npos) << overflow;
+  EXPECT_NE(overflow.find("overflows: lower p1, p2 or linear_stretch"), std::string::npos)
+      << overflow;
+  const std::string negative = config_error(with("passive: {p1: -1}"));
+  EXPECT_NE(negative.find("muscles[0].passive.p1"), std::string::npos) << negative;
+
+  const std::string twice =
+      config_error(std::string(kMinimal) +
+                   "visual:\n  - {name: skin, surface: outer}\n  - {name: skin, surface: outer}\n");
+  EXPECT_NE(twice.find("visual[1].name"), std::string::npos) << twice;
+  EXPECT_NE(twice.find("duplicate visual name 'skin'"), std::string::npos) << twice;
 }
 
 TEST(Spec, MissingSpecFileIsAnIoError) {

@@ -139,6 +139,29 @@ TEST(Plan, AStepOfZeroNamesTheModelAndTheElement) {
   }
 }
 
+// A muscle's passive p1 of 1e30 (a finite slope, a stable step of 2.4e-21 s) was reported as the
+// scene's duration being 4e18 steps, "more than a run can count" (issue 33): waves faster than in
+// any solid name the model, the element and where its stiffness comes from.
+TEST(Plan, WavesFasterThanAnySolidNameTheModelAndTheMuscle) {
+  auto model = layered_muscle_block();
+  model.muscles.front().passive_p1 = 1e30;
+  SimSetup s;
+  s.effects.muscles = true;
+  s.activation = {Curve::constant(1.0)};
+  s.duration = 0.01;
+  try {
+    make_plan(model, s);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(e.field(), "model") << what;
+    EXPECT_NE(what.find("Pa of its muscle fibres"), std::string::npos) << what;
+    EXPECT_NE(what.find("faster than in any solid"), std::string::npos) << what;
+    EXPECT_NE(what.find("passive curve (p1, p2)"), std::string::npos) << what;
+    EXPECT_EQ(what.find("duration"), std::string::npos) << what;
+  }
+}
+
 TEST(Plan, BadSetupsNameTheField) {
   const auto model = layered_muscle_block();
   SimSetup s;

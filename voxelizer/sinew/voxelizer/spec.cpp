@@ -1,6 +1,9 @@
 #include "sinew/voxelizer/spec.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -170,9 +173,12 @@ struct SpecReader {
     }
     auto unit_vector = [&](const char* key) {
       const Vec3d d = vec3(fb.require(key));
-      const double len = norm(d);
-      if (!(len > 0)) throw fb.child(key).error("must not be zero");
-      return (1.0 / len) * d;
+      // Scaled by its largest component first: the length of (1e308, 1e308, 0) overflows, and
+      // d / inf was a zero direction reported against the output file (issue 33).
+      const double big = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+      if (!(big > 0)) throw fb.child(key).error("must not be zero");
+      const Vec3d scaled = (1.0 / big) * d;
+      return (1.0 / norm(scaled)) * scaled;
     };
     if (f.kind == FibreSpec::Kind::constant) {
       f.direction = unit_vector("direction");
@@ -434,11 +440,22 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
     if (m.has("passive")) {
       const auto p = m.child("passive");
       p.allow_keys({"p1", "p2", "linear_stretch"});
-      if (p.has("p1")) s.passive_p1 = p.child("p1").number();
-      if (p.has("p2")) s.passive_p2 = p.child("p2").number();
+      if (p.has("p1")) s.passive_p1 = p.child("p1").non_negative();
+      if (p.has("p2")) s.passive_p2 = p.child("p2").positive();
       if (p.has("linear_stretch")) {
         s.passive_linear_stretch = p.child("linear_stretch").positive();
         if (s.passive_linear_stretch <= 1) throw p.child("linear_stretch").error("must be > 1");
+      }
+      // The curve's slope where it turns linear, P1 P2 exp(P2 (x* − 1)) (physics/muscle.hpp),
+      // sets the fibres' stiffness and so the stable step; one that overflows is no curve.
+      const double slope =
+          s.passive_p1 * s.passive_p2 * std::exp(s.passive_p2 * (s.passive_linear_stretch - 1));
+      if (!std::isfinite(slope)) {
+        throw p.error(
+            fmt::format("the passive curve's slope at linear_stretch, p1 p2 "
+                        "exp(p2 (x* - 1)) = {:.3g} x {:.3g} x exp({:.3g} x {:.3g}), "
+                        "overflows: lower p1, p2 or linear_stretch",
+                        s.passive_p1, s.passive_p2, s.passive_p2, s.passive_linear_stretch - 1));
       }
     }
     s.fibres = r.fibres(m.require("fibres"));
@@ -549,7 +566,11 @@ Spec parse_spec(const std::string& yaml_text, const std::filesystem::path& file)
   for (const auto& e : root.child("visual").items()) {
     e.allow_keys({"name", "surface"});
     if (!e.has("name") || !e.has("surface")) throw e.error("needs a name and a surface");
-    spec.visual.push_back({SpecReader::name(e.child("name")), r.surface(e.child("surface"))});
+    const std::string name = SpecReader::name(e.child("name"));
+    for (const auto& other : spec.visual) {
+      if (other.name == name) throw e.child("name").error("duplicate visual name '" + name + "'");
+    }
+    spec.visual.push_back({name, r.surface(e.child("surface"))});
   }
   if (!root.has("visual")) {
     spec.visual.push_back({"skin", SurfaceRef{"outer", std::nullopt, "visual"}});

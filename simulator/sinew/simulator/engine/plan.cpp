@@ -15,6 +15,10 @@
 namespace sinew::simulator {
 namespace {
 
+// Waves faster than in any solid (diamond's longitudinal sound speed is about 18,000 m/s): a model
+// whose stable step implies more has a stiffness out of range.
+constexpr double kMaxWaveSpeed = 1e5;  // m/s
+
 [[noreturn]] void bad(const std::string& field, const std::string& problem) {
   throw ConfigError("", field, problem);
 }
@@ -266,18 +270,24 @@ Plan make_plan(const formats::Model& model, const Setup& setup) {
   }
   plan.dt_critical = dt_crit;
   // A modulus so large that h/c underflows to 0 (a muscle reference stress of 1e308 Pa in a
-  // damaged model) was reported as the scene's duration being "inf steps at Δt = 0 s".
-  if (!(dt_crit > 0)) {
+  // damaged model) was reported as the scene's duration being "inf steps at Δt = 0 s"; one that
+  // makes waves faster than kMaxWaveSpeed (a muscle's passive p1 of 1e30: 4e18 steps for 10 ms)
+  // blamed the duration too. Both are the model's values.
+  if (!(dt_crit > 0) || h / dt_crit > kMaxWaveSpeed) {
     const auto e = std::size_t(plan.dt_critical_element);
     const auto& r = plan.parameters[std::size_t(plan.parameter_row[e])];
     throw ConfigError(
         "", "model",
-        fmt::format("the stable step h/c is {:.3g} s at element {} (wave modulus {:.3g} Pa, "
-                    "density {:.3g} kg/m^3): a material's stiffness or a muscle's reference "
-                    "stress is out of range, or the model is damaged",
+        fmt::format("the stable step h/c is {:.3g} s at element {} (wave modulus {:.3g} Pa: "
+                    "{:.3g} Pa of its materials, {:.3g} Pa of its muscle fibres; density {:.3g} "
+                    "kg/m^3; waves at {:.3g} m/s, faster than in any solid: at most {:.0f} m/s "
+                    "here): a material's stiffness, a muscle's reference stress or its passive "
+                    "curve (p1, p2) is out of range, or the model is damaged (sinew-inspect "
+                    "--element {} shows it)",
                     dt_crit, e,
                     (fx.elasticity ? r.p_wave : 0.0) + (fx.muscles ? muscle_modulus[e] : 0.0),
-                    r.density));
+                    fx.elasticity ? r.p_wave : 0.0, fx.muscles ? muscle_modulus[e] : 0.0, r.density,
+                    h / dt_crit, kMaxWaveSpeed, e));
   }
   const auto& ts = setup.time_step;
   const double allowed = ts.safety_factor * dt_crit;
