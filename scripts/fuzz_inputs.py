@@ -21,7 +21,11 @@ named .ply), runs each tool on each variant under a timeout, and classifies ever
   silent   a restart from a checkpoint whose state had one bit flipped (in /u, /u_prev,
            /sliding_triangle, or the step, time or dt attribute) exited 0: damage went unnoticed
 
-Exit status: 0 when no crash, hang, partial or silent was found, 1 otherwise. The seed makes the variants
+and, as target live_origin, sends sinew-live --play requests of a hostile web page (foreign Origins
+and Hosts: scripts/fuzz_live.py), each refused, accepted, hang or crash, then checks that the
+user's own page still gets in (own, or locked_out).
+
+Exit status: 0 when no crash, hang, partial, silent, accepted or locked_out was found, 1 otherwise. The seed makes the variants
 reproducible: `--seed 1 --variants 40` gives the same files on every machine.
 
   scripts/fuzz_inputs.py --build build/dev --work /tmp/sinew-fuzz --variants 40
@@ -42,6 +46,7 @@ import subprocess
 import sys
 import time
 
+import fuzz_live  # scripts/fuzz_live.py: hostile pages' requests to sinew-live
 import fuzz_meshes  # scripts/fuzz_meshes.py: the mesh seeds and mutations
 
 try:
@@ -842,8 +847,9 @@ def main():
     make_seeds(build, seed_dir, with_vox, meshes_only=with_vox and chosen == {"voxelize_mesh"})
 
     all_targets = targets(build, with_vox, args.three)
-    if chosen - {t.name for t in all_targets}:
-        sys.exit(f"fuzz_inputs: unknown targets {sorted(chosen - {t.name for t in all_targets})}")
+    known = {t.name for t in all_targets} | {"live_origin"}
+    if chosen - known:
+        sys.exit(f"fuzz_inputs: unknown targets {sorted(chosen - known)}")
     records = []
     counts = collections.OrderedDict()
     for target in all_targets:
@@ -888,6 +894,23 @@ def main():
                 shutil.rmtree(run_dir, ignore_errors=True)
         print(f"{target.name}: {len(kinds)} variants: " +
               ", ".join(f"{k} {v}" for k, v in sorted(counts[target.name].items())), flush=True)
+    if (not chosen or "live_origin" in chosen) and os.path.isdir(args.three):
+        run_dir = os.path.join(work, "live_origin")
+        os.makedirs(run_dir)
+        for e in ("results.h5", "scene.yaml", "model.h5"):
+            shutil.copy(os.path.join(seed_dir, e), os.path.join(run_dir, e))
+        argv = [tool(build, "live", "sinew-live"), "--play", "results.h5", "--port", "0",
+                "--three", args.three]
+        found, live_records, text = fuzz_live.campaign(argv, run_dir, args.variants, args.seed,
+                                                       args.timeout)
+        counts["live_origin"] = collections.Counter(found)
+        records += live_records
+        for r in live_records:
+            if r["class"] in fuzz_live.FAILURES:
+                print(f"[{r['class']}] live_origin ({r['mutation']}) status {r['status']}: "
+                      f"{text.strip()[-600:]}", flush=True)
+        print("live_origin: " + ", ".join(f"{k} {v}" for k, v in sorted(found.items())),
+              flush=True)
     if args.json:
         with open(args.json, "w") as f:
             json.dump(records, f, indent=1)
@@ -895,7 +918,8 @@ def main():
     for c in counts.values():
         total.update(c)
     print("total: " + ", ".join(f"{k} {v}" for k, v in sorted(total.items())))
-    return 1 if any(total[k] for k in ("crash", "hang", "partial", "silent")) else 0
+    failures = ("crash", "hang", "partial", "silent") + fuzz_live.FAILURES
+    return 1 if any(total[k] for k in failures) else 0
 
 
 if __name__ == "__main__":
