@@ -28,6 +28,7 @@
 #include "sinew/voxelizer/jaw.hpp"
 #include "sinew/voxelizer/mesh_bounds.hpp"
 #include "sinew/voxelizer/mesh_source.hpp"
+#include "sinew/voxelizer/muscle_ends.hpp"
 #include "sinew/voxelizer/offset.hpp"
 #include "sinew/voxelizer/primitives.hpp"
 #include "sinew/voxelizer/rig.hpp"
@@ -125,6 +126,8 @@ class Pipeline {
     fibres();
     timer.end("fibres");
     constraints();
+    for (const auto& f : free_muscle_ends(result_.model, muscle_ends_, outer_.mesh, 2 * h_))
+      warn(free_muscle_end_warning(f));
     timer.end("constraints");
     surfaces();
     timer.end("embedding");
@@ -140,6 +143,8 @@ class Pipeline {
   std::optional<JawGeometry> jaw_;  // rig.jaw
   // The lattice coordinates of the voxels the jaw's cut removed (for the lips' contact pairs).
   std::vector<std::array<std::int32_t, 3>> jaw_cut_;
+  // Each harmonic muscle's origin and insertion voxels (fibres()), for free_muscle_ends.
+  std::vector<MuscleEnd> muscle_ends_;
 
   LoadedMesh outer_;
   std::optional<LoadedMesh> inner_;
@@ -633,6 +638,13 @@ class Pipeline {
           tags[static_cast<std::size_t>(j)] = DirichletTag::insertion;
         }
       }
+      MuscleEnd origin{ms.name, "origin", {}}, insertion{ms.name, "insertion", {}};
+      for (std::size_t j = 0; j < n; ++j) {
+        if (tags[j] == DirichletTag::origin) origin.elements.push_back(mu.elements[j]);
+        if (tags[j] == DirichletTag::insertion) insertion.elements.push_back(mu.elements[j]);
+      }
+      muscle_ends_.push_back(std::move(origin));
+      muscle_ends_.push_back(std::move(insertion));
       const auto hf = harmonic_fibres(voxels, tags, "muscles[" + std::to_string(i) + "] " + ms.name,
                                       mu.fractions);
       mu.fibres.resize(n);
