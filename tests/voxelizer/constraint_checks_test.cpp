@@ -12,6 +12,7 @@
 
 #include "pipeline_test_util.hpp"
 #include "sinew/common/error.hpp"
+#include "sinew/common/icosphere.hpp"
 
 namespace sinew::voxelizer {
 namespace {
@@ -183,6 +184,60 @@ boundary: [{type: sliding, within: 0.5}]
             std::string::npos)
       << msg;
   EXPECT_NE(msg.find("glide_depth"), std::string::npos) << msg;
+}
+
+// An open skin (issue 34: a face mask) makes an open glide surface, which has no inside to ask:
+// nodes beside its edge lie behind its last triangles, and were only warned of ("misoriented or
+// folded triangles") before their elements inverted at step 0. Refused, saying the surface is open
+// and to keep the box away from its edge; a box away from the edge binds safely.
+TEST(SafeConstraints, BehindAnOpenSurfaceIsRefusedAndABoxAwayFromItsEdgeIsNot) {
+  const testing::TempDir dir;
+  const UnitIcosphere ico = make_unit_icosphere(4);
+  TriangleMesh cap;  // the sphere of radius 8 mm above z = -2 mm: open along its rim
+  std::vector<std::int32_t> index(ico.vertices.size(), -1);
+  for (const auto& t : ico.triangles) {
+    if (ico.vertices[static_cast<std::size_t>(t[0])].z < -0.25 ||
+        ico.vertices[static_cast<std::size_t>(t[1])].z < -0.25 ||
+        ico.vertices[static_cast<std::size_t>(t[2])].z < -0.25)
+      continue;
+    std::array<std::int32_t, 3> r{};
+    for (int k = 0; k < 3; ++k) {
+      auto& i = index[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])];
+      if (i < 0) {
+        i = static_cast<std::int32_t>(cap.vertices.size());
+        cap.vertices.push_back(
+            8.0 * ico.vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])]);
+      }
+      r[static_cast<std::size_t>(k)] = i;
+    }
+    cap.triangles.push_back(r);
+  }
+  testing::write_obj(cap, dir / "cap.obj");
+  auto spec = [&](const std::string& box) {
+    return R"(
+units: mm
+resolution: {voxel_size: 0.8}
+outer: {path: )" +
+           (dir / "cap.obj").string() +
+           R"(, unit: mm}
+tissue_thickness: 3
+glide_depth: 1.5
+materials: {preset: warburton2013}
+layers: [{material: dermis, thickness: 1}, {material: hypodermis}]
+boundary:
+  - {type: rigid, surface: glide, inside: true}
+  - {type: sliding, surface: glide, within: 3)" +
+           box + R"(}
+  - {type: rigid, inside: true}
+)";
+  };
+  const std::string msg = testing::expect_error<ConfigError>(spec(""), "cap.yaml");
+  EXPECT_NE(msg.find("boundary[1]: this condition"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("lie behind (inside) the surface they slide on"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("The surface is open"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("keep this condition's box away from the edge"), std::string::npos) << msg;
+  const auto r = run_spec(spec(", box: {min: [-10, -10, 3], max: [10, 10, 10]}"), "cap.yaml");
+  EXPECT_GT(r.summary.sliding_nodes, 0);
 }
 
 TEST(SafeConstraints, GlideDepthNeedsAnInnerSurfaceAndReservesItsName) {
