@@ -2,7 +2,7 @@
 //
 //   sinew-fit SCENE MARKERS.csv|RUN_FOLDER -o OUTDIR [options]
 //   sinew-fit SCENE --targets TARGETS.csv [--target-surface NAME] [--target-markers N] -o OUTDIR
-//             [--muscles a,b,...] [--max-activation A]
+//             [--muscles a,b,...] [--jaw auto|none|KEYS] [--max-activation A]
 //             [--knot-interval S] [--smoothing L] [--effort E] [--corrections N] [--step-activation A0]
 //             [--response-ramp S]
 //             [--marker-unit m|cm|mm] [--sample-interval S] [--cache DIR]
@@ -52,6 +52,9 @@ int main(int argc, char** argv) {
   app.add_option("-o,--output", o.output_dir, "Output folder")->required();
   app.add_option("--muscles", o.muscles, "Muscles to fit (default: every muscle of the model)")
       ->delimiter(',');
+  app.add_option("--jaw", o.jaw,
+                 "The jaw's keys to fit: auto (opening_deg, protrusion_mm, lateral_mm when the "
+                 "model has a jaw), none, or a comma-separated list (auto)");
   app.add_option("--max-activation", o.max_activation, "Upper bound of every activation (1)");
   app.add_option("--knot-interval", o.knot_interval,
                  "s between activation knots (default: the markers' median frame interval)");

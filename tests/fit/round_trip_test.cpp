@@ -64,6 +64,12 @@ const std::vector<Truth> kTruth = {
     {"frontalis_left", 0.0, 0.4},          {"corrugator_right", 0.01, 0.5},
     {"zygomaticus_major_left", 0.0, 0.5},  {"zygomaticus_major_right", 0.02, 0.3},
     {"levator_labii_superioris_left", 0.01, 0.4}, {"depressor_anguli_oris_right", 0.0, 0.35}};
+// And the jaw (the model has one): opening to 6° (speech's few millimetres at the incisors) from
+// 20 ms, no protrusion or lateral shift; Truth::peak in degrees here.
+const Truth kJawOpening{"opening_deg", 0.02, 6.0};
+// The jaw's keys recovered within 0.5° (opening) or 0.5 mm (protrusion, lateral shift): about
+// 0.6 mm at the incisors, below what people repeat an expression to.
+constexpr double kJawTolerance = 0.5;
 
 // The landmarks of data/landmarks/sample_head.yaml (mm), as the base scene's probes.
 std::vector<std::pair<std::string, std::array<double, 3>>> landmarks() {
@@ -169,6 +175,13 @@ void build(Workspace& w) {
       }
       curves += "]\n";
     }
+    curves += "jaw:\n  opening_deg: [";
+    for (int i = 0; i <= 100; ++i) {
+      const double time = kDuration * i / 100;
+      curves += (i ? ", [" : "[") + std::to_string(time) + ", " +
+                std::to_string(kJawOpening.at(time)) + "]";
+    }
+    curves += "]\n";
     const auto truth_scene = d.write("scenes/truth.yaml", base_scene_text(spec_name(), curves, extra));
     simulator::RunOptions o;
     o.scene_path = truth_scene.string();
@@ -219,27 +232,39 @@ const Workspace& workspace() {
   return w;
 }
 
-// The largest |fitted − truth| over every muscle and knot up to `until` s (0 for the muscles not
-// driven).
-double activation_error(const FitResult& r, std::string* where = nullptr, double until = 1e9) {
+// The largest |fitted − truth| over every curve (a muscle's activations or a jaw key's values) and
+// knot up to `until` s (truth 0 for the curves not driven).
+double curves_error(const std::vector<std::string>& names,
+                    const std::vector<std::vector<double>>& values,
+                    const std::vector<Truth>& truths, const FitResult& r, std::string* where,
+                    double until) {
   double worst = 0;
-  for (std::size_t k = 0; k < r.muscles.size(); ++k) {
+  for (std::size_t k = 0; k < names.size(); ++k) {
     const Truth* truth = nullptr;
-    for (const auto& t : kTruth)
-      if (t.muscle == r.muscles[k]) truth = &t;
+    for (const auto& t : truths)
+      if (t.muscle == names[k]) truth = &t;
     for (std::size_t j = 0; j < r.knot_times.size(); ++j) {
       if (r.knot_times[j] > until + 1e-9) break;
       const double expected = truth ? truth->at(r.knot_times[j]) : 0.0;
-      const double e = std::abs(r.activations[k][j] - expected);
+      const double e = std::abs(values[k][j] - expected);
       if (e > worst) {
         worst = e;
         if (where)
-          *where = r.muscles[k] + " at t = " + std::to_string(r.knot_times[j]) + ": fitted " +
-                   std::to_string(r.activations[k][j]) + ", truth " + std::to_string(expected);
+          *where = names[k] + " at t = " + std::to_string(r.knot_times[j]) + ": fitted " +
+                   std::to_string(values[k][j]) + ", truth " + std::to_string(expected);
       }
     }
   }
   return worst;
+}
+
+double activation_error(const FitResult& r, std::string* where = nullptr, double until = 1e9) {
+  return curves_error(r.muscles, r.activations, kTruth, r, where, until);
+}
+
+// The same for the jaw's keys, degrees or mm (opening_deg's truth kJawOpening, the others 0).
+double jaw_error(const FitResult& r, std::string* where = nullptr, double until = 1e9) {
+  return curves_error(r.jaw, r.jaw_values, {kJawOpening}, r, where, until);
 }
 
 // A temporary folder of `out` left beside it.
@@ -280,18 +305,26 @@ void exact_markers() {
               spec_name().c_str(), w.truth_run_s, r.muscles.size(), r.knot_times.size(), e,
               where.c_str(), r.rms_mm, r.max_mm);
   for (const double v : r.iteration_rms_mm) std::printf(" %.4f", v);
-  std::printf("; %d response runs in %.1f s, %d forward runs in %.1f s, solve %.2f s, total %.1f s\n",
-              r.response_runs, r.response_s, r.forward_runs, r.forward_s, r.solve_s, r.total_s);
+  std::string jaw_where;
+  const double je = jaw_error(r, &jaw_where);
+  std::printf(
+      "; jaw error %.3f (%s); %d response runs in %.1f s, %d forward runs in %.1f s, "
+      "solve %.2f s, total %.1f s\n",
+      je, jaw_where.c_str(), r.response_runs, r.response_s, r.forward_runs, r.forward_s, r.solve_s,
+      r.total_s);
   EXPECT_EQ(r.muscles.size(), 18u);
+  EXPECT_EQ(r.jaw, (std::vector<std::string>{"opening_deg", "protrusion_mm", "lateral_mm"}));
   EXPECT_LE(e, 0.05) << where;
+  EXPECT_LE(je, kJawTolerance) << jaw_where;
   EXPECT_LE(r.rms_mm, 0.3);
   for (const char* f : {"fitted_scene.yaml", "activations.csv", "marker_error.csv",
                         "fit_summary.json"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
   EXPECT_FALSE(leftovers(out));
-  // The fitted scene reads back as a scene with every fitted muscle's curve.
+  // The fitted scene reads back as a scene with every fitted muscle's curve and the jaw's.
   const auto fitted = simulator::parse_scene((out / "fitted_scene.yaml").string());
   EXPECT_EQ(fitted.activations.size(), r.muscles.size());
+  EXPECT_NE(read(out / "fitted_scene.yaml").find("opening_deg"), std::string::npos);
 }
 
 // Noise σ = 0.5 mm and 20% missing in every third frame: within 0.1.
@@ -317,15 +350,19 @@ void noisy_markers() {
   o.knot_interval = 0.02;
   o.smoothing = 1e-2;
   const FitResult r = run_fit(o);
-  std::string where, where_all;
+  std::string where, where_all, jaw_where;
   const double e = activation_error(r, &where, kDuration - 0.02);
   const double e_all = activation_error(r, &where_all);
+  const double je = jaw_error(r, &jaw_where, kDuration - 0.02);
+  std::printf("[round trip noisy] jaw error %.3f to %.2f s (%s)\n", je, kDuration - 0.02,
+              jaw_where.c_str());
   std::printf("[round trip %s, noise 0.5 mm, 20%% missing in every third frame] activation error "
               "%.4f to %.2f s (%s), %.4f with the last 20 ms (%s), marker RMS %.4f mm against the noisy "
               "markers; %d of %d response runs reused, total %.1f s\n",
               spec_name().c_str(), e, kDuration - 0.02, where.c_str(), e_all, where_all.c_str(),
               r.rms_mm, r.response_runs_reused, r.response_runs, r.total_s);
   EXPECT_LE(e, 0.1) << where;
+  EXPECT_LE(je, 2 * kJawTolerance) << jaw_where;
 }
 
 // One test, so that the noisy fit reuses the exact fit's response runs (each gtest case runs in a
@@ -379,6 +416,21 @@ TEST(FitRoundTrip, BadMarkersAreNamedAndNothingIsWritten) {
   e = bad_fit("backwards.csv", backwards);
   EXPECT_NE(e.find("backwards.csv: line 4, column 'time': time 0.001 does not come after"),
             std::string::npos) << e;
+  // A jaw key the scene does not have, and one named twice: refused before any run.
+  const auto markers = w.dir.write("markers_jaw.csv", text);
+  for (const auto& [keys, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"opening_deg,chin_deg", "--jaw: unknown jaw key 'chin_deg'"},
+           {"lateral_mm,lateral_mm", "--jaw: jaw key 'lateral_mm' named twice"}}) {
+    FitOptions o = options(markers.string(), (w.dir / "fit_jaw").string());
+    o.jaw = keys;
+    try {
+      run_fit(o);
+      ADD_FAILURE() << keys << ": no error";
+    } catch (const ConfigError& c) {
+      EXPECT_NE(std::string(c.what()).find(expected), std::string::npos) << c.what();
+    }
+    EXPECT_FALSE(fs::exists(w.dir / "fit_jaw")) << keys;
+  }
 }
 
 }  // namespace

@@ -139,13 +139,16 @@ BoundedSolution solve_bounded_least_squares(const Eigen::MatrixXd& a, const Eige
   const double mu = options.effort * (scale > 0 ? scale : 1.0);
   const Eigen::MatrixXd penalty = second_difference_penalty(curves, values);
   Q += lambda * penalty;
-  const Eigen::VectorXd q = a.transpose() * y - Eigen::VectorXd::Constant(n, mu);
+  const Eigen::VectorXd weights = options.effort_weights.size() == static_cast<Eigen::Index>(n)
+                                      ? options.effort_weights
+                                      : Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n));
+  const Eigen::VectorXd q = a.transpose() * y - mu * weights;
   BoundedSolution s = solve_box_qp(Q, q, lower, upper, start, options.max_sweeps,
                                    options.tolerance);
   s.lambda = lambda;
   s.mu = mu;
   s.misfit = (a * s.x - y).squaredNorm();
-  s.objective = s.misfit + lambda * s.x.dot(penalty * s.x) + 2 * mu * s.x.sum();
+  s.objective = s.misfit + lambda * s.x.dot(penalty * s.x) + 2 * mu * weights.dot(s.x);
   return s;
 }
 

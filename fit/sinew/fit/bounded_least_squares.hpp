@@ -35,6 +35,9 @@ struct BoundedSolution {
 struct BoundedOptions {
   double smoothing = 1e-3;  // λ relative to trace(AᵀA) / n; > 0
   double effort = 0;        // μ relative to trace(AᵀA) / n; ≥ 0
+  // The unknowns the effort term weighs (1) and leaves out (0), e.g. a jaw's shift, which may
+  // be negative; empty: all of them (the term is then 2μ Σ w_i x_i).
+  Eigen::VectorXd effort_weights;
   int max_sweeps = 20000;
   double tolerance = 1e-10;  // on the largest change of an unknown in a sweep
 };

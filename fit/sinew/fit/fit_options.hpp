@@ -21,6 +21,10 @@ struct FitOptions {
   int target_markers = 200;    // vertices sampled as markers (farthest-point); 0: every vertex
   std::string output_dir;    // written as <output_dir>.tmp-<pid>, renamed at the end
   std::vector<std::string> muscles;  // the muscles fitted; empty: every muscle of the model
+  // The jaw's degrees of freedom fitted (the scene's `jaw:` keys, docs/scene-format.md): "auto"
+  // (opening_deg, protrusion_mm and lateral_mm when the model has a jaw, else none), "none", or
+  // a comma-separated list of them. Fitted, they replace the base scene's `jaw:`.
+  std::string jaw = "auto";
   double max_activation = 1;         // upper bound of every activation, (0, 1]
   double knot_interval = 0;          // s between knots; 0: the markers' median frame interval
   double step_activation = 0.3;      // a0 of the response runs
@@ -40,6 +44,8 @@ struct FitResult {
   std::vector<std::string> muscles;               // K
   std::vector<double> knot_times;                 // J + 1, from 0
   std::vector<std::vector<double>> activations;   // K × (J + 1), 0 at t = 0
+  std::vector<std::string> jaw;                   // D fitted jaw keys (opening_deg, ...)
+  std::vector<std::vector<double>> jaw_values;    // D × (J + 1): degrees or mm, 0 at t = 0
   std::vector<double> frame_times;                // F, the markers'
   std::vector<double> frame_rms_mm;               // F, NaN for a frame with no marker seen
   std::vector<double> frame_max_mm;               // F

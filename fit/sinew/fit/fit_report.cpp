@@ -64,10 +64,12 @@ void write_fit_tables(const std::string& dir, const FitResult& r, const FitOptio
   const std::filesystem::path d(dir);
   std::string act = "time";
   for (const auto& m : r.muscles) act += "," + m;
+  for (const auto& k : r.jaw) act += ",jaw." + k;
   act += '\n';
   for (std::size_t j = 0; j < r.knot_times.size(); ++j) {
     act += fmt::format("{:.9g}", r.knot_times[j]);
     for (const auto& curve : r.activations) act += fmt::format(",{:.9g}", curve[j]);
+    for (const auto& curve : r.jaw_values) act += fmt::format(",{:.9g}", curve[j]);
     act += '\n';
   }
   write_text_atomically((d / "activations.csv").string(), act);
@@ -99,6 +101,7 @@ void write_fit_tables(const std::string& dir, const FitResult& r, const FitOptio
   j["scene"] = o.scene_path;
   j["markers"] = o.markers_path;
   j["muscles"] = r.muscles;
+  j["jaw"] = r.jaw;
   j["knot_interval_s"] = r.knot_times.size() > 1 ? r.knot_times[1] : 0.0;
   j["knots"] = r.knot_times.size();
   j["frames"] = r.frame_times.size();

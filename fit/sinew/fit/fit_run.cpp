@@ -7,8 +7,10 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <map>
 #include <memory>
+#include <sstream>
 
 #include "sinew/common/atomic_file.hpp"
 #include "sinew/common/error.hpp"
@@ -77,6 +79,31 @@ std::string muscles_yaml(const std::vector<std::string>& names,
   return s + "}";
 }
 
+// The jaw's degrees of freedom as the fit sees them (scene keys, docs/scene-format.md): values in
+// units of `unit` (10° or 5 mm, so that a unit moves the face about as much as a muscle's full
+// activation and one smoothing weight suits all), inside the scene's ranges (run/scene_jaw.hpp),
+// response runs driven to `step` units: 5° of opening, 1 mm of shift (a shift of the whole
+// mandible shears the voxels between its nodes and the skull's, at the ramus: 2.5 mm in the 5 ms
+// of a response's ramp inverted one of the 4 mm head's).
+struct JawDof {
+  const char* key;
+  double unit, lowest, highest;  // the key's units (degrees, mm)
+  double step;                   // units
+};
+constexpr JawDof kJawDofs[] = {{"opening_deg", 10, 0, 40, 0.5},
+                               {"protrusion_mm", 5, -1, 12, 0.2},
+                               {"lateral_mm", 5, -15, 15, 0.2}};
+// The jaw's response runs ramp over at least this long (response.hpp: any ramp serves): 5° in the
+// 5 ms of a 200 frames/s capture's ramp inverted a voxel at the 4 mm head's ramus, 6° in 50 ms
+// did not (the round trip's truth).
+constexpr double kJawRamp = 0.03;  // s
+
+// The jaw: mapping of curves (values in the keys' units) as one line of YAML.
+std::string jaw_yaml(const std::vector<std::string>& keys,
+                     const std::vector<std::vector<std::array<double, 2>>>& curves) {
+  return muscles_yaml(keys, curves);
+}
+
 struct SceneMaker {
   YamlNode doc;
   std::string model_path;  // absolute
@@ -84,13 +111,14 @@ struct SceneMaker {
   std::string probes;      // when not empty: the probes list, replaced (target nodes added)
 
   // The base scene with the model path absolute, the duration, the muscles' curves and (when not
-  // empty) the output section and the probes replaced.
-  std::string text(double duration, const std::string& muscles,
-                   const std::string& output) const {
+  // empty) the jaw's curves, the output section and the probes replaced.
+  std::string text(double duration, const std::string& muscles, const std::string& output,
+                   const std::string& jaw = "") const {
     std::vector<YamlReplacement> r;
     r.push_back({"model", parse_yaml(fmt::format("'{}'", model_path), file)});
     r.push_back({"duration", parse_yaml(number(duration), file)});
     r.push_back({"muscles", parse_yaml(muscles, file)});
+    if (!jaw.empty()) r.push_back({"jaw", parse_yaml(jaw, file)});
     if (!output.empty()) r.push_back({"output", parse_yaml(output, file)});
     if (!probes.empty()) r.push_back({"probes", parse_yaml(probes, file)});
     return doc.replaced(r);
@@ -346,6 +374,33 @@ FitResult run_fit(const FitOptions& o,
   }
   if (result.muscles.empty())
     throw ConfigError(scene.model_path, "/muscles", "the model has no muscles to fit");
+  std::vector<JawDof> jaw_dofs;
+  if (o.jaw == "auto") {
+    if (model.jaw) jaw_dofs.assign(std::begin(kJawDofs), std::end(kJawDofs));
+  } else if (o.jaw != "none") {
+    std::stringstream list(o.jaw);
+    std::string key;
+    while (std::getline(list, key, ',')) {
+      const auto* d = std::find_if(std::begin(kJawDofs), std::end(kJawDofs),
+                                   [&](const JawDof& j) { return key == j.key; });
+      if (d == std::end(kJawDofs))
+        throw ConfigError("", "--jaw",
+                          fmt::format("unknown jaw key '{}' (auto, none, or a list of "
+                                      "opening_deg, protrusion_mm, lateral_mm)",
+                                      key));
+      if (std::any_of(jaw_dofs.begin(), jaw_dofs.end(),
+                      [&](const JawDof& j) { return key == j.key; }))
+        throw ConfigError("", "--jaw", fmt::format("jaw key '{}' named twice", key));
+      jaw_dofs.push_back(*d);
+    }
+    if (!model.jaw && !jaw_dofs.empty())
+      throw ConfigError(scene.model_path, "/jaw",
+                        "the model has no jaw to fit (voxelize it with rig: {jaw: true}, or "
+                        "--jaw none)");
+  }
+  for (const auto& d : jaw_dofs) result.jaw.push_back(d.key);
+  // With the jaw fitted every run drives it (closed in the muscles' responses).
+  const std::string jaw_closed = jaw_dofs.empty() ? "" : "{opening_deg: 0}";
 
   // Target meshes are in m (sinew-export writes m) unless --marker-unit says otherwise.
   const double unit = from_probes         ? scene.length_unit
@@ -401,9 +456,9 @@ FitResult run_fit(const FitOptions& o,
   const auto t_response = Clock::now();
   std::vector<std::vector<ProbePath>> responses;
   for (const auto& muscle : result.muscles) {
-    const std::string text = maker.text(
-        end_time,
-        muscles_yaml({muscle}, {{{0.0, 0.0}, {ramp, o.step_activation}}}), work_output);
+    const std::string text =
+        maker.text(end_time, muscles_yaml({muscle}, {{{0.0, 0.0}, {ramp, o.step_activation}}}),
+                   work_output, jaw_closed);
     log::info("sinew-fit: response of {}", muscle);
     auto run = forward(text, response_root / ("response_" + muscle), model_file->sha256, run_probes,
                        o, models, !o.cache_dir.empty());
@@ -412,30 +467,74 @@ FitResult run_fit(const FitOptions& o,
     if (!run.reused) result.steps_per_run = run.steps;
     responses.push_back(paths_of(std::move(run.paths)));
   }
+  std::vector<std::vector<ProbePath>> jaw_responses;
+  const double jaw_ramp = std::max(ramp, kJawRamp);
+  for (const auto& d : jaw_dofs) {
+    const std::string text =
+        maker.text(end_time, "{}", work_output,
+                   jaw_yaml({d.key}, {{{0.0, 0.0}, {jaw_ramp, d.step * d.unit}}}));
+    log::info("sinew-fit: response of the jaw's {}", d.key);
+    auto run = forward(text, response_root / (std::string("response_jaw_") + d.key),
+                       model_file->sha256, run_probes, o, models, !o.cache_dir.empty());
+    result.response_runs += 1;
+    result.response_runs_reused += run.reused;
+    if (!run.reused) result.steps_per_run = run.steps;
+    jaw_responses.push_back(paths_of(std::move(run.paths)));
+  }
   result.response_s = seconds_since(t_response);
 
-  const int K = static_cast<int>(result.muscles.size());
+  const int M = static_cast<int>(result.muscles.size());
+  const int D = static_cast<int>(jaw_dofs.size());
+  const int K = M + D;  // the columns' groups: the muscles, then the jaw's keys
   const int J = knots.count;
   const auto t_solve = Clock::now();
-  const Eigen::MatrixXd a =
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(K) * J);
+  a.leftCols(static_cast<Eigen::Index>(M) * J) =
       design_matrix(responses, o.step_activation, ramp, knots, markers.times, rows);
-  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(K) * J);
-  const Eigen::VectorXd upper = Eigen::VectorXd::Constant(lower.size(), o.max_activation);
+  for (int d = 0; d < D; ++d)
+    a.middleCols(static_cast<Eigen::Index>(M + d) * J, J) = design_matrix(
+        {jaw_responses[static_cast<std::size_t>(d)]}, jaw_dofs[static_cast<std::size_t>(d)].step,
+        jaw_ramp, knots, markers.times, rows);
+  Eigen::VectorXd lower = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(K) * J);
+  Eigen::VectorXd upper = Eigen::VectorXd::Constant(lower.size(), o.max_activation);
+  for (int d = 0; d < D; ++d) {
+    const auto& dof = jaw_dofs[static_cast<std::size_t>(d)];
+    const auto at = static_cast<Eigen::Index>(M + d) * J;
+    lower.segment(at, J).setConstant(dof.lowest / dof.unit);
+    upper.segment(at, J).setConstant(dof.highest / dof.unit);
+  }
   BoundedOptions bo;
   bo.smoothing = o.smoothing;
   bo.effort = o.effort;
+  // The effort term prefers the fewest muscles; the jaw's keys are poses, not effort.
+  bo.effort_weights = Eigen::VectorXd::Zero(lower.size());
+  bo.effort_weights.head(static_cast<Eigen::Index>(M) * J).setOnes();
   auto solution = solve_bounded_least_squares(a, y, K, J, lower, upper, {}, bo);
   result.solve_s += seconds_since(t_solve);
 
   // 2. Forward runs of the fitted activations, refitting the residual with the same response.
+  // The muscles' curves (activations), then the jaw's (degrees, mm).
   auto curves_of = [&](const Eigen::VectorXd& x) {
     std::vector<std::vector<std::array<double, 2>>> curves(static_cast<std::size_t>(K));
     for (int k = 0; k < K; ++k) {
+      const double scale = k < M ? 1.0 : jaw_dofs[static_cast<std::size_t>(k - M)].unit;
       curves[k].push_back({0.0, 0.0});
       for (int j = 1; j <= J; ++j)
-        curves[k].push_back({knots.time(j), std::clamp(x[k * J + j - 1], 0.0, o.max_activation)});
+        curves[k].push_back(
+            {knots.time(j),
+             scale * std::clamp(x[k * J + j - 1], lower[k * J + j - 1], upper[k * J + j - 1])});
     }
     return curves;
+  };
+  // The scene text of curves: the muscles' mapping and (fitting the jaw) the jaw's.
+  auto scene_of = [&](const std::vector<std::vector<std::array<double, 2>>>& curves,
+                      const std::string& output) {
+    const std::vector<std::vector<std::array<double, 2>>> muscle_curves(curves.begin(),
+                                                                        curves.begin() + M);
+    const std::vector<std::vector<std::array<double, 2>>> jaw_curves(curves.begin() + M,
+                                                                     curves.end());
+    return maker.text(end_time, muscles_yaml(result.muscles, muscle_curves), output,
+                      D > 0 ? jaw_yaml(result.jaw, jaw_curves) : "");
   };
   Eigen::VectorXd best_x = solution.x;
   double best_rms = INFINITY;
@@ -443,8 +542,7 @@ FitResult run_fit(const FitOptions& o,
   Eigen::VectorXd x = solution.x;
   for (int it = 0; it <= o.corrections; ++it) {
     const auto t_forward = Clock::now();
-    const std::string text =
-        maker.text(end_time, muscles_yaml(result.muscles, curves_of(x)), work_output);
+    const std::string text = scene_of(curves_of(x), work_output);
     log::info("sinew-fit: forward run {} of {}", it + 1, o.corrections + 1);
     auto run = forward(text, runs / fmt::format("forward_{}", it), model_file->sha256, run_probes,
                        o, models, false);
@@ -480,7 +578,7 @@ FitResult run_fit(const FitOptions& o,
   for (int k = 0; k < K; ++k) {
     std::vector<double> v;
     for (const auto& p : curves[k]) v.push_back(p[1]);
-    result.activations.push_back(std::move(v));
+    (k < M ? result.activations : result.jaw_values).push_back(std::move(v));
   }
   result.frame_times = markers.times;
   result.frame_rms_mm = best_errors.frame_rms_mm;
@@ -504,7 +602,7 @@ FitResult run_fit(const FitOptions& o,
   write_text_atomically((tmp.path() / "fitted_scene.yaml").string(),
                         "# sinew-fit: " + o.scene_path + " with the activations fitted to " +
                             (from_targets ? o.targets_path : o.markers_path) + " (docs/fit.md)\n" +
-                            maker.text(end_time, muscles_yaml(result.muscles, curves), ""));
+                            scene_of(curves, ""));
   result.total_s = seconds_since(start);
   write_fit_tables(tmp.path().string(), result, o);
   if (before_commit) before_commit(tmp.path().string(), result);
