@@ -121,6 +121,23 @@ TEST(TargetMesh, AnotherTopologyIsRejectedWithTheFaceAndItsLine) {
                 "(sinew-export's rest OBJ, sculpted with its vertex order kept)");
 }
 
+// A target in other units than the fit reads (issue 29: the sculpt saved in mm, read as m) is
+// refused with both sizes and --marker-unit; given its unit, it passes.
+TEST(TargetMesh, ATargetInOtherUnitsIsRefusedWithBothSizes) {
+  const auto model = testing::box_with_skin();
+  const auto& skin = model.surfaces.front();
+  EXPECT_NO_THROW(check_target_scale(parse_obj_mesh(testing::skin_obj(skin), "rest.obj"), skin, 1));
+  std::vector<formats::Point> mm = skin.vertices;
+  for (auto& p : mm)
+    for (double& c : p) c *= 1000;
+  const ObjMesh in_mm = parse_obj_mesh(testing::skin_obj(skin, mm), "mm.obj");
+  const std::string e = error_of([&] { check_target_scale(in_mm, skin, 1); });
+  EXPECT_EQ(e.rfind("mm.obj: v: the target spans ", 0), 0u) << e;
+  EXPECT_NE(e.find("1e+03 times its size"), std::string::npos) << e;
+  EXPECT_NE(e.find("give --marker-unit"), std::string::npos) << e;
+  EXPECT_NO_THROW(check_target_scale(in_mm, skin, 0.001));
+}
+
 TEST(TargetMarkers, EachMarkerIsItsVertexInterpolatedFromItsElementsNodes) {
   const auto model = testing::box_with_skin();
   const auto& skin = model.surfaces.front();

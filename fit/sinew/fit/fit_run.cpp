@@ -323,6 +323,7 @@ FitResult run_fit(const FitOptions& o,
     for (const auto& path : manifest.meshes) {
       meshes.push_back(read_obj_mesh(path));
       check_target_topology(meshes.back(), surface);
+      check_target_scale(meshes.back(), surface, o.marker_unit > 0 ? o.marker_unit : 1.0);
     }
     targets = target_markers(manifest, meshes, model, surface,
                              static_cast<std::size_t>(o.target_markers));

@@ -193,6 +193,27 @@ void check_target_topology(const ObjMesh& mesh, const formats::Surface& surface)
   }
 }
 
+void check_target_scale(const ObjMesh& mesh, const formats::Surface& surface, double unit) {
+  auto diagonal = [](const auto& points, double scale) {
+    std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+    for (const auto& p : points)
+      for (int d = 0; d < 3; ++d) {
+        lo[static_cast<std::size_t>(d)] = std::min(lo[static_cast<std::size_t>(d)], p[d] * scale);
+        hi[static_cast<std::size_t>(d)] = std::max(hi[static_cast<std::size_t>(d)], p[d] * scale);
+      }
+    return std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  };
+  const double target = diagonal(mesh.vertices, unit), rest = diagonal(surface.vertices, 1.0);
+  if (!(target <= kTargetScaleTolerance * rest && rest <= kTargetScaleTolerance * target))
+    throw FormatError(
+        mesh.file, "v",
+        fmt::format("the target spans {:.4g} m (its bounding box's diagonal at {:.4g} m per unit), "
+                    "the surface '{}' {:.4g} m at rest: {:.3g} times its size; a target in other "
+                    "units? sinew-export writes m; give --marker-unit (m per unit of the targets, "
+                    "e.g. 0.001 for mm)",
+                    target, unit, surface.name, rest, target / rest));
+}
+
 std::array<double, 8> trilinear_weights(const formats::Point& local) {
   // Node a of the hex8 order has natural-coordinate signs (2·di − 1, 2·dj − 1, 2·dk − 1).
   static constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},

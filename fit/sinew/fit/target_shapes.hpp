@@ -69,6 +69,14 @@ ObjMesh parse_obj_mesh(const std::string& text, const std::string& file);
 // vertex count, face count and every face's vertex ids in order.
 void check_target_topology(const ObjMesh& mesh, const formats::Surface& surface);
 
+// Throws FormatError (the mesh's file, "v", both sizes and the fix) unless the target's size, the
+// diagonal of its vertices' bounding box times `unit` (m per unit of the mesh), lies within a
+// factor of kTargetScaleTolerance of the surface's at rest: a sculpt moves the skin by
+// millimetres, a mesh in other units (mm or cm read as m; sinew-export writes m) by a factor of
+// 10 to 1000, which the fit would take for a displacement of metres.
+inline constexpr double kTargetScaleTolerance = 2;
+void check_target_scale(const ObjMesh& mesh, const formats::Surface& surface, double unit);
+
 // The surface vertex of each target marker and the probes that record it.
 struct TargetMarkers {
   Markers markers;                     // names "target_v<vertex>", positions in m
