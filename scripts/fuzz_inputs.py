@@ -764,14 +764,7 @@ def run_one(target, build, run_dir, variant_file, timeout, memory_gib, label="")
             time.sleep(0.05)
         served = b"open http" in out
         if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGTERM)
-            try:
-                proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-                hung = True
-            hung = hung or not served
+            hung = fuzz_live.stop(proc) or not served
         os.set_blocking(proc.stdout.fileno(), True)
         out += proc.stdout.read() or b""
         rc = 0 if served and not hung else proc.returncode

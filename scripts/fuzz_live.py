@@ -47,6 +47,21 @@ HOSTILE_HOSTS = [
 ]
 
 
+def stop(proc):
+    """Stops a server started in its own session: SIGTERM, then SIGKILL after 5 s. Returns whether
+    it had to be killed (it hung)."""
+    if proc.poll() is not None:
+        return False
+    os.killpg(proc.pid, signal.SIGTERM)
+    try:
+        proc.wait(timeout=5)
+        return False
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        return True
+
+
 def _request(port, lines, timeout):
     """Sends one request (header lines) to the server; returns its status code, or None when it
     did not answer, or -1 when it could not be reached."""
@@ -139,13 +154,7 @@ def campaign(argv, run_dir, count, seed, timeout):
         tally("own" if page == 200 and ws == 101 else "locked_out",
               "own page and WebSocket", [page, ws])
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGTERM)
-            try:
-                proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
+        stop(proc)
         os.set_blocking(proc.stdout.fileno(), True)
         out += proc.stdout.read() or b""
     return counts, records, out.decode("utf-8", "replace")
