@@ -12,18 +12,14 @@
 // Exit status: 0 done, 1 bad input or I/O error, 2 bad command line.
 #include <CLI/CLI.hpp>
 
-#include <algorithm>
 #include <cstdio>
 #include <string>
 
 #include "results_options.hpp"
 #include "sinew/common/error.hpp"
 #include "sinew/common/tool.hpp"
-#include "sinew/postprocess/element_fields.hpp"
-#include "sinew/postprocess/gltf_writer.hpp"
-#include "sinew/postprocess/pc2_writer.hpp"
+#include "sinew/postprocess/export_results.hpp"
 #include "sinew/postprocess/results_reader.hpp"
-#include "sinew/postprocess/vertex_attributes.hpp"
 
 int main(int argc, char** argv) {
   using namespace sinew;
@@ -67,59 +63,19 @@ int main(int argc, char** argv) {
       for (const auto& name : list_surfaces(results)) std::printf("%s\n", name.c_str());
       return tool::kExitOk;
     }
-    if (glb.empty() && pc2.empty() && obj_dir.empty()) {
-      throw ConfigError("", "command line",
-                        "nothing to export: give --glb, --pc2 or --obj-sequence");
-    }
-    if (!pc2.empty() && rest_obj.empty()) {
-      throw ConfigError("", "--rest-obj",
-                        "--pc2 needs --rest-obj: the cache applies to a mesh of the same vertex "
-                        "order");
-    }
-    const auto vertex_scalar = parse_vertex_scalar(color);
-    const auto anim = read_surface(results, surface);
-    std::printf("%s: surface \"%s\", %zu vertices, %zu triangles, %zu frames (t = %g .. %g s)%s\n",
-                results.c_str(), anim.name.c_str(), anim.vertex_count(), anim.triangle_count(),
-                anim.frame_count(), anim.times.front(), anim.times.back(),
-                anim.has_uvs() ? ", texture coordinates" : "");
-    // Von Mises stress at the vertices: element values averaged to nodes and interpolated.
-    const auto color_values = vertex_scalar == VertexScalar::von_mises
-                                  ? element_field_at_vertices(results, anim, "/frames/von_mises")
-                                  : std::vector<std::vector<float>>{};
-    if (!color_values.empty()) {
-      float max = 0;
-      for (const float s : peak_over_frames(color_values)) max = std::max(max, s);
-      std::printf("von Mises stress at the surface: 0 .. %g Pa (viridis)\n", max);
-    }
-    if (!glb.empty()) {
-      GltfOptions o;
-      o.color_values = color_values;
-      o.up = parse_up_axis(up);
-      o.fps = fps;
-      o.time_scale = time_scale;
-      o.linear = linear;
-      o.color = vertex_scalar;
-      const auto timing = write_glb(glb, anim, o);
-      std::printf(
-          "wrote %s (%zu morph targets, %s): %g fps, results frame 0 at frame 0, "
-          "frame %zu at frame %lld\n",
-          glb.c_str(), anim.frame_count(), linear ? "linear" : "step", timing.fps,
-          anim.frame_count() - 1, static_cast<long long>(timing.frame.back()));
-    }
-    if (!pc2.empty()) {
-      write_pc2(pc2, anim);
-      ObjAttributes attributes = texture_attributes(anim);
-      attributes.normals = smooth_normals(anim.rest, anim.triangles);
-      write_obj(rest_obj, anim.rest, anim.triangles,
-                "sinew surface " + anim.name + " rest pose (vertex order of " + pc2 + ")",
-                attributes);
-      std::printf("wrote %s (%zu samples, results frame k at frame k) and %s\n", pc2.c_str(),
-                  anim.frame_count(), rest_obj.c_str());
-    }
-    if (!obj_dir.empty()) {
-      const auto paths = write_obj_sequence(obj_dir, anim, "frame", vertex_scalar, color_values);
-      std::printf("wrote %zu OBJ files into %s\n", paths.size(), obj_dir.c_str());
-    }
+    ExportRequest request;
+    request.results = results;
+    request.surface = surface;
+    request.glb = glb;
+    request.pc2 = pc2;
+    request.rest_obj = rest_obj;
+    request.obj_sequence = obj_dir;
+    request.up = up;
+    request.color = color;
+    request.fps = fps;
+    request.time_scale = time_scale;
+    request.linear = linear;
+    for (const auto& line : export_results(request)) std::printf("%s\n", line.c_str());
     return tool::kExitOk;
   });
 }

@@ -303,7 +303,9 @@ void expect_motion(const std::string& name, const ExpressionRun& r) {
     EXPECT_LT(u("chin").z, ah ? -6.0 : -9.0);
     EXPECT_LT(std::abs(u("upper_lip").y), 1.5);
     EXPECT_GT(u("upper_lip").y - u("lower_lip").y, ah ? 3.0 : 4.0);  // the lips part
-    if (!ah) EXPECT_GT(u("brow_centre_left").y, 2.0);
+    if (!ah) {
+      EXPECT_GT(u("brow_centre_left").y, 2.0);
+    }
   } else if (name == "oo") {
     // The pout with the jaw 3° open: upper lip (0.8, −1.7, 2.9), lower lip (0.7, −3.8, −1.4).
     EXPECT_GT(u("upper_lip").z, 1.5);           // the lips forward, as the pout
@@ -371,8 +373,9 @@ TEST_P(FaceExpression, RunsWithoutInversionAndMovesAsExpected) {
     // The incisal point turns about the axis 99.02 mm away: chord 2 r sin(θ/2).
     const std::map<std::string, double> opening_mm = {
         {"ah", 12.090}, {"surprise", 17.260}, {"oo", 5.184}};
-    if (const auto it = opening_mm.find(name); it != opening_mm.end())
+    if (const auto it = opening_mm.find(name); it != opening_mm.end()) {
       EXPECT_NEAR(1e3 * r.summary.jaw_max_incisal_opening, it->second, 0.005);
+    }
   }
   if (name != "sneer" && name != "chew") {  // the sneer and the chewing stroke are one-sided
     const auto [err, umax] = mirror_error(r);

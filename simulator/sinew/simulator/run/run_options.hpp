@@ -20,6 +20,11 @@ namespace sinew::simulator {
 
 struct RunOptions {
   std::string scene_path;
+  // The scene itself, when it is not read from scene_path (the Python module's scenes made from a
+  // dict or edited in memory): scene_path then only names it in messages and the summary, and
+  // scene_directory resolves its relative model path. Empty: scene_path is read.
+  std::string scene_text;
+  std::string scene_directory;
   std::string output_dir;              // created when missing
   std::string device = "auto";         // cpu | cuda | auto
   std::optional<Precision> precision;  // overrides the scene's

@@ -107,9 +107,11 @@ LoadedRun load_run(const RunOptions& options, const std::function<void(Setup&)>&
   };
   LoadedRun r;
   r.cuda = choose_cuda(options.device);
-  r.scene_text = read_scene_text(options.scene_path);
-  r.scene = parse_scene_text(r.scene_text, options.scene_path,
-                             fs::path(options.scene_path).parent_path().string());
+  const bool given = !options.scene_text.empty();
+  r.scene_text = given ? options.scene_text : read_scene_text(options.scene_path);
+  r.scene = parse_scene_text(
+      r.scene_text, options.scene_path,
+      given ? options.scene_directory : fs::path(options.scene_path).parent_path().string());
   const Scene& scene = r.scene;
   std::error_code ec;  // a name the system refuses (too long, a loop of links) is named here
   const bool model_exists = fs::exists(scene.model_path, ec);

@@ -97,6 +97,10 @@ bool interrupt_requested() {
   return g_interrupt.load() != 0;
 }
 
+void request_interrupt() {
+  g_interrupt.store(SIGINT);
+}
+
 void clear_interrupt() {
   g_interrupt.store(0);
 }

@@ -46,6 +46,9 @@ RunResult run_scene(const RunOptions& options);
 // other (sinew-sweep) sees it too.
 void install_interrupt_handlers();
 bool interrupt_requested();
+// Asks every run in flight to stop as SIGINT would (the Python module, whose own SIGINT handler
+// Python keeps, calls it on Ctrl-C while a run_scene works on another thread).
+void request_interrupt();
 void clear_interrupt();
 
 }  // namespace sinew::simulator
