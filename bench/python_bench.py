@@ -7,8 +7,9 @@
 MODEL is a forehead model (sinew-voxelize data/specs/forehead_1mm.yaml, or scripts/demo's
 out/demo/forehead_1mm.h5); the scene is data/scenes/brow_raise.yaml on it, cut to N steps, with
 only the first and last frames and no probes, so both sides time the same steps:
-  - sinew-simulate: run_summary.json's time_per_step_s (its step loop's wall time / steps), the
-    median of `--repeats` runs;
+  - sinew-simulate: run_summary.json's time_per_step_s (its step loop's wall time / steps, with
+    the last frame's writing), and the loop's `steps` stage alone (time_per_step_by_stage_s), the
+    median of `--repeats` runs each;
   - Python: sinew.Simulation(scene).step(K) called N/K times, wall time / N, median of as many
     repeats (the engine built before the clock starts, as the tool's set-up is outside its loop);
   - displacements(): the median of 200 calls at the end (N × 3 float64 into a new array).
@@ -51,7 +52,7 @@ scene = base.with_(duration=a.steps * probe.dt / probe.time_scaling * (1 - 1e-9)
 steps = sinew.Simulation(scene, device=a.device, threads=a.threads).steps_planned
 del probe
 
-tool, python, reads = [], [], []
+tool, tool_steps, python, reads = [], [], [], []
 with tempfile.TemporaryDirectory() as tmp:
     scene.save(os.path.join(tmp, "scene.yaml"))
     for r in range(a.repeats):
@@ -63,6 +64,7 @@ with tempfile.TemporaryDirectory() as tmp:
             summary = json.load(f)
         assert summary["steps_this_run"] == steps, summary["steps_this_run"]
         tool.append(summary["time_per_step_s"])
+        tool_steps.append(summary["time_per_step_by_stage_s"]["steps"])
 
         sim = sinew.Simulation(scene, device=a.device, threads=a.threads)
         start = time.perf_counter()
@@ -75,12 +77,14 @@ with tempfile.TemporaryDirectory() as tmp:
         reads.append(time.perf_counter() - start)
 
 t, py, rd = statistics.median(tool), statistics.median(python), statistics.median(reads)
+ts = statistics.median(tool_steps)
 print(f"model {a.model}: {sim.model.element_count} elements, {sim.model.node_count} nodes; "
       f"{sim.device}, {sim.precision}, OMP_WAIT_POLICY={os.environ['OMP_WAIT_POLICY']}; "
       f"{steps} steps, {a.per_call} per call, median of {a.repeats}")
 print("| | per step | vs sinew-simulate |")
 print("|---|---|---|")
 print(f"| sinew-simulate (time_per_step_s) | {1e3 * t:.3f} ms | |")
+print(f"| sinew-simulate, its steps stage alone | {1e3 * ts:.3f} ms | |")
 print(f"| Simulation.step({a.per_call}) from Python | {1e3 * py:.3f} ms | "
       f"{100 * (py / t - 1):+.1f}% |")
 print(f"| displacements() ({sim.model.node_count} × 3) | {1e3 * rd:.3f} ms | |")

@@ -8,13 +8,17 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <chrono>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
 #include "sinew/formats/model.hpp"
+#include "sinew/simulator/run/runner.hpp"
 #include "sinew/simulator/run/scene.hpp"
 
 namespace sinew::python {
@@ -27,6 +31,7 @@ void bind_scene(py::module_& m);
 void bind_run(py::module_& m);
 void bind_simulation(py::module_& m);
 void bind_results(py::module_& m);
+void bind_fit(py::module_& m);
 
 // sinew.Model: a model in memory (read, voxelized or a simulation's), immutable, with the file it
 // came from or was saved to ("" when it has none).
@@ -55,6 +60,44 @@ template <typename F>
 auto without_gil(F&& work) {
   py::gil_scoped_release release;
   return work();
+}
+
+// Runs `work` (a run_scene, a fit) on another thread while this one holds on to Python's signals:
+// Python keeps SIGINT, so this thread waits with the GIL released and checks Python's signals
+// every 50 ms; on KeyboardInterrupt it asks the runs to stop (simulator::request_interrupt: at
+// their next step boundary, with a checkpoint, as the tools' SIGINT), waits for `work` to end and
+// raises KeyboardInterrupt. `work`'s own exception is rethrown otherwise.
+template <typename F>
+auto run_watching_signals(F work) -> decltype(work()) {
+  using Result = decltype(work());
+  simulator::clear_interrupt();
+  std::packaged_task<Result()> task(std::move(work));
+  auto result = task.get_future();
+  std::thread worker(std::move(task));
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    while (result.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+      py::gil_scoped_acquire acquire;
+      if (!interrupted && PyErr_CheckSignals() != 0) {
+        interrupted = true;
+        PyErr_Clear();  // raised again below, once the work has stopped
+        simulator::request_interrupt();
+      }
+    }
+  }
+  worker.join();
+  simulator::clear_interrupt();
+  if (interrupted) {
+    try {
+      result.get();
+    } catch (...) {
+      // The interruption is what the caller asked for; the work's failure follows from it.
+    }
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
+  return result.get();  // rethrows the work's exception (translated to sinew.*)
 }
 
 // A vector's memory as a NumPy array of `shape` (the array owns it; no copy).

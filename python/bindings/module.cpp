@@ -11,4 +11,5 @@ PYBIND11_MODULE(_sinew, m) {
   bind_run(m);
   bind_simulation(m);
   bind_results(m);
+  bind_fit(m);
 }

@@ -8,11 +8,7 @@
 // "interrupted", as sinew-simulate's SIGINT), and re-raises KeyboardInterrupt.
 #include <nlohmann/json.hpp>
 
-#include <chrono>
-#include <exception>
 #include <filesystem>
-#include <future>
-#include <thread>
 
 #include "bindings.hpp"
 #include "sinew/common/atomic_file.hpp"
@@ -31,34 +27,6 @@ std::string with_absolute_model(const PyScene& scene) {
   const auto absolute = fs::absolute(scene.scene.model_path).lexically_normal().string();
   const auto root = parse_yaml(scene.text, name);
   return root.replaced({{"model", parse_yaml(nlohmann::json(absolute).dump(), name)}});
-}
-
-// Runs `work` on another thread while this one watches Python's signals (above).
-simulator::RunResult run_watching_signals(std::function<simulator::RunResult()> work) {
-  simulator::clear_interrupt();
-  std::packaged_task<simulator::RunResult()> task(std::move(work));
-  auto result = task.get_future();
-  std::thread worker(std::move(task));
-  bool interrupted = false;
-  {
-    py::gil_scoped_release release;
-    while (result.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
-      py::gil_scoped_acquire acquire;
-      if (!interrupted && PyErr_CheckSignals() != 0) {
-        interrupted = true;
-        PyErr_Clear();  // raised again below, once the run has stopped
-        simulator::request_interrupt();
-      }
-    }
-  }
-  worker.join();
-  simulator::clear_interrupt();
-  auto out = result.get();  // rethrows the run's exception (translated to sinew.*)
-  if (interrupted) {
-    PyErr_SetNone(PyExc_KeyboardInterrupt);
-    throw py::error_already_set();
-  }
-  return out;
 }
 
 }  // namespace

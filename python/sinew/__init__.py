@@ -42,7 +42,7 @@ __all__ = [
     "ConfigError", "Error", "FormatError", "GeometryError", "InputError", "IoError", "Model",
     "ResourceError", "Results", "Scene", "Simulation", "State", "UnstableError", "cuda_available",
     "has_voxelizer",
-    "run", "voxelize",
+    "fit", "run", "voxelize",
 ]
 
 PathLike = Union[str, "_os.PathLike[str]"]
@@ -228,3 +228,54 @@ class Simulation(_sinew._Simulation):
     def __repr__(self) -> str:
         return (f"<sinew.Simulation {self.model.element_count} elements on {self.device}, "
                 f"{self.precision}, step {self.step_index} of {self.steps_planned}>")
+
+
+def fit(scene: Union[Scene, PathLike], *, out: PathLike, markers: Optional[PathLike] = None,
+        targets: Optional[PathLike] = None, target_surface: str = "", target_markers: int = 200,
+        muscles: Optional[list] = None, jaw: str = "auto", max_activation: float = 1.0,
+        knot_interval: float = 0.0, step_activation: float = 0.3, response_ramp: float = 0.0,
+        smoothing: float = 1e-3, effort: float = 0.0, corrections: int = 4,
+        marker_unit: float = 0.0, sample_interval: float = 0.0,
+        cache: Optional[PathLike] = None, device: str = "cpu", threads: int = 0) -> dict:
+    """Fits the rig's muscle activations (and the jaw's keys) to markers: what sinew-fit does
+    (docs/fit.md), with its options by the same names.
+
+    markers: a marker CSV, or a run's output folder (its displacement probes become markers);
+    or targets: a target-shape manifest (sculpts of a visual surface at key times). out: the
+    output folder (fitted_scene.yaml, activations.csv, marker_error.csv, fit_summary.json,
+    runs/), written under a temporary name and renamed at the end. Returns the fit as a dict:
+    muscles, knot_times and activations (K × knots) as arrays, the jaw's keys and values, the
+    marker error per frame and per marker (mm), rms_mm, max_mm, the runs made and their wall
+    times, and fitted_scene (a sinew.Scene that replays the fit). Ctrl-C stops the fit's run at
+    a step boundary and raises KeyboardInterrupt; nothing is left under `out`.
+    """
+    if (markers is None) == (targets is None):
+        raise ConfigError("fit: give markers (a CSV or a run's folder) or targets (a manifest), "
+                          "one of them")
+    s = _scene_of(scene)
+    o = _sinew._FitOptions()
+    with _tempfile.TemporaryDirectory(prefix="sinew-fit-") as tmp:
+        o.scene_path = _os.path.join(tmp, "scene.yaml")
+        s.save(o.scene_path)
+        o.markers_path = _os.fspath(markers) if markers is not None else ""
+        o.targets_path = _os.fspath(targets) if targets is not None else ""
+        o.target_surface = target_surface
+        o.target_markers = target_markers
+        o.output_dir = _os.fspath(out)
+        o.muscles = list(muscles or [])
+        o.jaw = jaw
+        o.max_activation = max_activation
+        o.knot_interval = knot_interval
+        o.step_activation = step_activation
+        o.response_ramp = response_ramp
+        o.smoothing = smoothing
+        o.effort = effort
+        o.corrections = corrections
+        o.marker_unit = marker_unit
+        o.sample_interval = sample_interval
+        o.cache_dir = _os.fspath(cache) if cache is not None else ""
+        o.device = device
+        o.threads = threads
+        result = _sinew._fit(o)
+    result["fitted_scene"] = Scene.load(_os.path.join(result["output_dir"], "fitted_scene.yaml"))
+    return result

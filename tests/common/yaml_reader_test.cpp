@@ -4,9 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -205,6 +208,43 @@ TEST(YamlReader, TypeConversionFailures) {
     EXPECT_EQ(std::string(config_error(read).what()), "types.yaml: " + message);
   }
   EXPECT_DOUBLE_EQ(root.child("z").non_negative(), 0.0);
+}
+
+// Numbers are read without a locale (std::from_chars; yaml_reader.cpp says why): YAML 1.2's core
+// schema, the forms yaml-cpp's stream read took, and nothing more.
+TEST(YamlReader, NumbersInEveryFormAndNothingElse) {
+  const YamlNode root = parse_yaml(
+      "a: +5\nb: -.5\nc: 5.\nd: 1.0e5\ne: 2E-3\nf: 7\ng: -0.0\n"
+      "i: 0x1F\nj: 0o17\nk: -9223372036854775808\nl: 9223372036854775807\nm: 010\n"
+      "bad_inf: inf\nbad_nan: nan\nbad_hex: 0x10\nbad_big: 1e400\nbad_comma: 0,5\n"
+      "bad_space: 1 2\nbad_over: 9223372036854775808\nbad_sign: +-3\ninf: -.inf\n",
+      "n.yaml");
+  EXPECT_EQ(root.child("a").number(), 5.0);
+  EXPECT_EQ(root.child("b").number(), -0.5);
+  EXPECT_EQ(root.child("c").number(), 5.0);
+  EXPECT_EQ(root.child("d").number(), 1.0e5);
+  EXPECT_EQ(root.child("e").number(), 2e-3);
+  EXPECT_EQ(root.child("f").number(), 7.0);
+  EXPECT_TRUE(std::signbit(root.child("g").number()));
+  EXPECT_EQ(root.child("f").integer(), 7);
+  EXPECT_EQ(root.child("i").integer(), 31);
+  EXPECT_EQ(root.child("j").integer(), 15);
+  EXPECT_EQ(root.child("k").integer(), std::numeric_limits<std::int64_t>::min());
+  EXPECT_EQ(root.child("l").integer(), std::numeric_limits<std::int64_t>::max());
+  EXPECT_EQ(root.child("m").integer(), 10);  // YAML 1.2: decimal (octal is 0o10)
+  for (const char* key :
+       {"bad_inf", "bad_nan", "bad_hex", "bad_big", "bad_comma", "bad_space", "bad_sign"}) {
+    const auto e = config_error([&] { root.child(key).number(); });
+    EXPECT_NE(std::string(e.what()).find(": expected a number, got '"), std::string::npos)
+        << key << ": " << e.what();
+  }
+  for (const char* key : {"bad_over", "bad_sign", "d"}) {
+    const auto e = config_error([&] { root.child(key).integer(); });
+    EXPECT_NE(std::string(e.what()).find(": expected an integer, got '"), std::string::npos)
+        << key << ": " << e.what();
+  }
+  EXPECT_EQ(std::string(config_error([&] { root.child("inf").number(); }).what()),
+            "n.yaml: inf: expected a finite number, got '-.inf' (line 21)");
 }
 
 TEST(YamlReader, ChoosesFromANameTable) {

@@ -3,10 +3,16 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 
 #include <fmt/format.h>
@@ -182,7 +188,71 @@ std::string YamlNode::text() const {
 }
 
 namespace {
-// n.as<T>(), or the ConfigError "expected <what>, got '<text>'" from `at`.
+// Numbers are read here, not by yaml-cpp's n.as<double>(): that goes through an istringstream and
+// its locale's num_get facet, and in a process where another library brought its own copy of the
+// facets' ids (the Python module beside a NumPy wheel built with a newer libstdc++ linked in part
+// statically) the facet looked up is not num_get and the read crashes. std::from_chars reads the
+// same decimal text with no locale at all. YAML 1.2's core schema: [-+]?(.5|5|5.|5.5)([eE][-+]?5)?
+// for floats, .inf/-.inf/.nan for the special values; [-+]?[0-9]+, 0x.. and 0o.. for integers.
+std::optional<double> parse_double(std::string_view t) {
+  if (t == ".nan" || t == ".NaN" || t == ".NAN") return std::numeric_limits<double>::quiet_NaN();
+  bool negative = false;
+  std::string_view body = t;
+  if (!body.empty() && (body.front() == '+' || body.front() == '-')) {
+    negative = body.front() == '-';
+    body.remove_prefix(1);
+  }
+  if (body == ".inf" || body == ".Inf" || body == ".INF")
+    return negative ? -std::numeric_limits<double>::infinity()
+                    : std::numeric_limits<double>::infinity();
+  // Digits, one point and an exponent only: from_chars alone would also take "inf" and "nan".
+  if (body.empty() ||
+      !(std::isdigit(static_cast<unsigned char>(body.front())) || body.front() == '.'))
+    return std::nullopt;
+  double v = 0;
+  const auto [end, ec] =
+      std::from_chars(body.data(), body.data() + body.size(), v, std::chars_format::general);
+  if (ec != std::errc() || end != body.data() + body.size()) return std::nullopt;
+  return negative ? -v : v;
+}
+
+std::optional<std::int64_t> parse_integer(std::string_view t) {
+  bool negative = false;
+  std::string_view body = t;
+  if (!body.empty() && (body.front() == '+' || body.front() == '-')) {
+    negative = body.front() == '-';
+    body.remove_prefix(1);
+  }
+  int base = 10;
+  if (body.size() > 2 && body[0] == '0' && (body[1] == 'x' || body[1] == 'o')) {
+    base = body[1] == 'x' ? 16 : 8;
+    body.remove_prefix(2);
+  }
+  if (body.empty() || body.front() == '-' || body.front() == '+') return std::nullopt;
+  std::uint64_t magnitude = 0;
+  const auto [end, ec] = std::from_chars(body.data(), body.data() + body.size(), magnitude, base);
+  if (ec != std::errc() || end != body.data() + body.size()) return std::nullopt;
+  const auto limit = static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max());
+  if (magnitude > limit + (negative ? 1 : 0)) return std::nullopt;
+  return negative ? static_cast<std::int64_t>(0 - magnitude) : static_cast<std::int64_t>(magnitude);
+}
+
+template <typename T>
+std::optional<T> parse_scalar(const YAML::Node& n) {
+  if constexpr (std::is_same_v<T, double>) {
+    return parse_double(n.Scalar());
+  } else if constexpr (std::is_same_v<T, std::int64_t>) {
+    return parse_integer(n.Scalar());
+  } else {
+    try {
+      return n.as<T>();  // bool: yaml-cpp compares words, no stream
+    } catch (const YAML::Exception&) {
+      return std::nullopt;
+    }
+  }
+}
+
+// The scalar as T, or the ConfigError "expected <what>, got '<text>'" from `at`.
 template <typename T>
 T convert(const YAML::Node& n, const YamlNode& at, const char* what) {
   if (!n.IsScalar()) throw at.error(fmt::format("expected {}", what));
@@ -191,11 +261,8 @@ T convert(const YAML::Node& n, const YamlNode& at, const char* what) {
   if (n.Tag() == "!")
     throw at.error(fmt::format("expected {}, got the quoted string '{}' (write it without quotes)",
                                what, n.Scalar()));
-  try {
-    return n.as<T>();
-  } catch (const YAML::Exception&) {
-    throw at.error(fmt::format("expected {}, got '{}'", what, n.Scalar()));
-  }
+  if (const auto v = parse_scalar<T>(n)) return *v;
+  throw at.error(fmt::format("expected {}, got '{}'", what, n.Scalar()));
 }
 }  // namespace
 
