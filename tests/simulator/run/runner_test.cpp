@@ -9,6 +9,8 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -20,6 +22,7 @@
 #include "sinew/common/error.hpp"
 #include "sinew/formats/model_file.hpp"
 #include "sinew/simulator/engine/checkpoint.hpp"
+#include "sinew/simulator/engine/cpu_engine.hpp"
 #include "sinew/simulator/engine/cuda_backend.hpp"
 #include "sinew/simulator/run/runner.hpp"
 
@@ -645,6 +648,77 @@ TEST(Runner, MuscleBlockSceneContracts) {
       min_ux = std::min(min_ux, ux);
   }
   EXPECT_LT(min_ux, -1e-3);  // shortened by more than a millimetre
+}
+
+// The engine a run is given, counting the runner's step() calls (everything else passed on).
+class CountingBackend : public Backend {
+ public:
+  explicit CountingBackend(std::unique_ptr<Backend> inner, int* calls)
+      : inner_(std::move(inner)), calls_(calls) {}
+  std::string name() const override { return inner_->name(); }
+  const Plan& plan() const override { return inner_->plan(); }
+  void step(std::int64_t n) override {
+    ++*calls_;
+    inner_->step(n);
+  }
+  std::int64_t step_index() const override { return inner_->step_index(); }
+  std::int64_t preferred_step_count() const override { return inner_->preferred_step_count(); }
+  double time() const override { return inner_->time(); }
+  double dt() const override { return inner_->dt(); }
+  State state() const override { return inner_->state(); }
+  void restore(const State& s) override { inner_->restore(s); }
+  std::vector<double> displacements() const override { return inner_->displacements(); }
+  std::vector<double> displacements(const std::vector<Index>& nodes) const override {
+    return inner_->displacements(nodes);
+  }
+  std::vector<double> velocities() const override { return inner_->velocities(); }
+  std::vector<double> internal_forces() override { return inner_->internal_forces(); }
+  std::array<double, 3> reaction(const std::vector<Index>& nodes) override {
+    return inner_->reaction(nodes);
+  }
+  Energies energies() override { return inner_->energies(); }
+  ElementFields element_fields() override { return inner_->element_fields(); }
+  void set_activation_override(std::size_t m, std::optional<double> a) override {
+    inner_->set_activation_override(m, a);
+  }
+  std::optional<double> activation_override(std::size_t m) const override {
+    return inner_->activation_override(m);
+  }
+  std::size_t force_slot_count() const override { return inner_->force_slot_count(); }
+  void set_force_slot(std::size_t k, const std::vector<Index>& nodes,
+                      const std::array<double, 3>& force) override {
+    inner_->set_force_slot(k, nodes, force);
+  }
+  void clear_force_slot(std::size_t k) override { inner_->clear_force_slot(k); }
+  Frame frame(bool with_fields) override { return inner_->frame(with_fields); }
+
+ private:
+  std::unique_ptr<Backend> inner_;
+  int* calls_;
+};
+
+// A scene without probes steps in the engine's batches between frames: the default probe schedule
+// (every step) applies only where there are probes, or a GPU would run one step per call.
+TEST(Runner, AnUnprobedSceneStepsInBatches) {
+  TempDir dir("batches");
+  write_model(dir);
+  std::string scene = kMuscleScene;
+  scene = scene.substr(0, scene.find("  probe_interval:"));
+  write_file(dir / "scene.yaml", scene);
+  int calls = 0;
+  auto o = options_for(dir / "scene.yaml", dir / "out");
+  o.make_backend = [&](const formats::Model& model, const simulator::Setup& setup) {
+    return std::unique_ptr<Backend>(
+        std::make_unique<CountingBackend>(make_cpu_backend(model, setup), &calls));
+  };
+  const auto r = run_scene(o);
+  ASSERT_EQ(r.summary.status, "completed");
+  const std::int64_t steps = r.summary.steps_done;
+  ASSERT_GT(steps, 200);
+  // Each frame interval (0.02 s of 0.3: 15 frames after the first) takes its steps in batches of
+  // up to 64: at most ceil(steps/64) + one per frame.
+  EXPECT_LE(calls, steps / 64 + 1 + 16) << steps << " steps";
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/probe_tip.csv"));
 }
 
 }  // namespace
