@@ -55,7 +55,20 @@ class Simulation {
     std::unique_lock lock(mutex_, std::try_to_lock);
     if (!lock.owns_lock())
       throw std::runtime_error("this Simulation is busy in another thread (stepping)");
-    return f(*run_.backend);
+    return f(backend());
+  }
+
+  simulator::Backend& backend() {
+    if (!run_.backend) throw std::runtime_error("this Simulation is closed");
+    return *run_.backend;
+  }
+
+  // Frees the engine (its GPU memory) now rather than when Python collects the object.
+  void close() {
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock())
+      throw std::runtime_error("this Simulation is busy in another thread (stepping)");
+    run_.backend.reset();
   }
 
   void step(std::int64_t n) {
@@ -63,7 +76,7 @@ class Simulation {
     std::unique_lock lock(mutex_, std::try_to_lock);
     if (!lock.owns_lock())
       throw std::runtime_error("this Simulation is busy in another thread (stepping)");
-    auto& backend = *run_.backend;
+    auto& backend = this->backend();
     const std::int64_t batch = std::max<std::int64_t>(1, backend.preferred_step_count());
     for (std::int64_t done = 0; done < n;) {
       const std::int64_t k = std::min(batch, n - done);
@@ -135,6 +148,9 @@ same scene and model continues bit for bit. Arrays are copies.
       .def(py::init<const PyScene&, const std::string&, const py::object&, int, bool, int>(),
            py::arg("scene"), py::arg("device"), py::arg("precision"), py::arg("threads"),
            py::arg("steering"), py::arg("force_slots"))
+      .def("close", &Simulation::close,
+           "Frees the engine (and its GPU memory) now; any later call raises RuntimeError. "
+           "`with sinew.Simulation(...) as sim:` closes it at the end of the block.")
       .def("step", &Simulation::step, py::arg("n") = 1,
            "Advances n steps of Δt (the GIL released; Ctrl-C raises KeyboardInterrupt at a step "
            "boundary). Raises sinew.UnstableError, the state then at the step where the problem "
@@ -151,7 +167,7 @@ same scene and model continues bit for bit. Arrays are copies.
           },
           "s of scene time: n · Δt / time_scaling (results' frame times).")
       .def_property_readonly(
-          "dt", [](Simulation& s) { return s.run_.backend->dt(); },
+          "dt", [](Simulation& s) { return s.backend().dt(); },
           "Δt, s of simulated time (the plan's: docs/physics.md; run_summary.json's dt_s).")
       .def_property_readonly("time_scaling",
                              [](Simulation& s) { return s.run_.resolved.setup.time_scaling; })
@@ -251,7 +267,7 @@ same scene and model continues bit for bit. Arrays are copies.
           },
           py::arg("muscle"), "The muscle's steered target, or None when its curve drives it.")
       .def_property_readonly(
-          "force_slots", [](Simulation& s) { return s.run_.backend->force_slot_count(); },
+          "force_slots", [](Simulation& s) { return s.backend().force_slot_count(); },
           "How many set_force slots it has (0 unless the scene's effects include loads).")
       .def(
           "set_force",

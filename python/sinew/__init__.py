@@ -225,9 +225,19 @@ class Simulation(_sinew._Simulation):
         """N × 3, m: the nodes' current positions (rest + displacements)."""
         return self.model.nodes + self.displacements()
 
+    def __enter__(self) -> "Simulation":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
     def __repr__(self) -> str:
+        try:
+            where = f"step {self.step_index} of {self.steps_planned}"
+        except RuntimeError as e:  # closed, or stepping in another thread
+            where = str(e).replace("this Simulation is ", "")
         return (f"<sinew.Simulation {self.model.element_count} elements on {self.device}, "
-                f"{self.precision}, step {self.step_index} of {self.steps_planned}>")
+                f"{self.precision}, {where}>")
 
 
 def fit(scene: Union[Scene, PathLike], *, out: PathLike, markers: Optional[PathLike] = None,

@@ -133,6 +133,18 @@ def test_an_instability_raises_and_keeps_a_finite_state(scene):
     assert np.all(np.isfinite(sim.displacements()))
 
 
+def test_close_frees_the_engine(scene):
+    with sinew.Simulation(scene, device="cpu") as sim:
+        sim.step(10)
+        assert "step 10 of" in repr(sim)
+    assert "closed" in repr(sim)
+    with pytest.raises(RuntimeError, match="closed"):
+        sim.step(1)
+    with pytest.raises(RuntimeError, match="closed"):
+        sim.displacements()
+    assert sim.model.node_count == 208  # the model outlives the engine
+
+
 def test_bad_arguments(scene):
     with pytest.raises(sinew.ConfigError, match="unknown device 'tpu'"):
         sinew.Simulation(scene, device="tpu")

@@ -188,12 +188,11 @@ std::string YamlNode::text() const {
 }
 
 namespace {
-// Numbers are read here, not by yaml-cpp's n.as<double>(): that goes through an istringstream and
-// its locale's num_get facet, and in a process where another library brought its own copy of the
-// facets' ids (the Python module beside a NumPy wheel built with a newer libstdc++ linked in part
-// statically) the facet looked up is not num_get and the read crashes. std::from_chars reads the
-// same decimal text with no locale at all. YAML 1.2's core schema: [-+]?(.5|5|5.|5.5)([eE][-+]?5)?
-// for floats, .inf/-.inf/.nan for the special values; [-+]?[0-9]+, 0x.. and 0o.. for integers.
+// Numbers are read here, not by yaml-cpp's n.as<double>(), which goes through an istringstream and
+// its locale's num_get facet: in the GPU machine's Python, once a NumPy wheel had been imported, that
+// read crashed inside the facet (docs/python.md, "Known problem"). std::from_chars reads the same
+// decimal text with no locale at all. YAML 1.2's core schema: [-+]?(.5|5|5.|5.5)([eE][-+]?5)? for
+// floats, .inf/-.inf/.nan for the special values; [-+]?[0-9]+, 0x.. and 0o.. for integers.
 std::optional<double> parse_double(std::string_view t) {
   if (t == ".nan" || t == ".NaN" || t == ".NAN") return std::numeric_limits<double>::quiet_NaN();
   bool negative = false;
