@@ -85,9 +85,13 @@ class Results:
         return f
 
     def _series(self, name: str, frame: Optional[int]) -> np.ndarray:
-        # Rows past the last complete frame (its time written last) are not results yet.
-        data = self._dataset(name)[: self.frame_count]
-        return data if frame is None else data[self._frame(frame)]
+        if frame is None or name in self._cache:
+            # Rows past the last complete frame (its time written last) are not results yet.
+            data = self._dataset(name)[: self.frame_count]
+            return data if frame is None else data[self._frame(frame)]
+        # One frame: its virtual view (/frame_views/<f>/<series>), not the whole series.
+        view = f"/frame_views/{self._frame(frame)}/{name.rsplit('/', 1)[1]}"
+        return _sinew._results_dataset(self.file, view, False)
 
     def displacements(self, frame: Optional[int] = None) -> np.ndarray:
         """Node displacements u, m: N × 3 of one frame (negative counts from the end), or
