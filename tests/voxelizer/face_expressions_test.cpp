@@ -111,7 +111,7 @@ const ExpressionRun& run(const std::string& name, const std::string& device,
   const auto at = scene.find(original);
   EXPECT_NE(at, std::string::npos);
   scene.replace(at, original.size(), "model: ../specs/" + model + ".h5");
-  // The scenes hold their peak for the tissue to come to rest (0.4 s, the jaw's poses 0.6 s:
+  // The scenes hold their peak for the tissue to come to rest (0.5 s, the jaw's poses 0.6 s:
   // docs/faces.md); the muscles' checks here (direction, symmetry, no inversion) hold from the end
   // of the ramp, so CI stops them at 0.1 s. The tissue follows the jaw more slowly (the chin and
   // lips are carried by the whole lower face): those poses run to 0.4 s, and the chewing stroke
@@ -295,8 +295,9 @@ void expect_motion(const std::string& name, const ExpressionRun& r) {
     // The jaw turned 7° (ah) or 10° (surprise) about the axis 12 mm in front of the tragi: the
     // incisal point moves 7.5 (10.7) mm down and 9.5 (13.4) back, and the lower lip and chin
     // follow it down and back; the upper lip stays (the lips part at the cut between them). At
-    // 4 mm at 0.4 s: lower lip (0.1, −5.2, −8.7), chin (−0.1, −4.4, −8.9), lips parted 4.6 mm (ah);
-    // (0.1, −6.4, −12.4), (−0.1, −5.9, −12.3), 6.0 mm (surprise).
+    // 4 mm at 0.4 s, with the paper's 48 MPa stratum corneum: lower lip (0.1, −5.2, −8.7), chin
+    // (−0.1, −4.4, −8.9), lips parted 4.6 mm (ah); (0.1, −6.4, −12.4), (−0.1, −5.9, −12.3),
+    // 6.0 mm (surprise).
     const bool ah = name == "ah";
     EXPECT_LT(u("lower_lip").y, ah ? -3.5 : -4.5);
     EXPECT_LT(u("chin").y, ah ? -3.0 : -4.0);
