@@ -49,12 +49,18 @@ class Simulation {
     steering_ = steering;
   }
 
-  // The backend, for one call, refused while another thread steps.
-  template <typename F>
-  auto with_backend(F&& f) {
+  // This call's hold on the simulation, refused while another thread steps.
+  std::unique_lock<std::mutex> exclusive() {
     std::unique_lock lock(mutex_, std::try_to_lock);
     if (!lock.owns_lock())
       throw std::runtime_error("this Simulation is busy in another thread (stepping)");
+    return lock;
+  }
+
+  // The backend, for one call, refused while another thread steps.
+  template <typename F>
+  auto with_backend(F&& f) {
+    const auto lock = exclusive();
     return f(backend());
   }
 
@@ -65,17 +71,13 @@ class Simulation {
 
   // Frees the engine (its GPU memory) now rather than when Python collects the object.
   void close() {
-    std::unique_lock lock(mutex_, std::try_to_lock);
-    if (!lock.owns_lock())
-      throw std::runtime_error("this Simulation is busy in another thread (stepping)");
+    const auto lock = exclusive();
     run_.backend.reset();
   }
 
   void step(std::int64_t n) {
     if (n < 0) throw ConfigError("", "n", fmt::format("cannot step backwards ({})", n));
-    std::unique_lock lock(mutex_, std::try_to_lock);
-    if (!lock.owns_lock())
-      throw std::runtime_error("this Simulation is busy in another thread (stepping)");
+    const auto lock = exclusive();
     auto& backend = this->backend();
     const std::int64_t batch = std::max<std::int64_t>(1, backend.preferred_step_count());
     for (std::int64_t done = 0; done < n;) {
